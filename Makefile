@@ -1,0 +1,32 @@
+# soilbin: `make run` solves the default scene, `make test` runs the test suite.
+# Both install what is missing first (Debian packages, the venv, soilbin itself).
+VENV    := .venv
+PY      := $(VENV)/bin/python
+STAMP   := $(VENV)/.soilbin-installed
+SCENE   ?= scenes/strip-footing-von-mises.toml
+OUT     ?= runs
+export OMP_NUM_THREADS := 1
+
+.PHONY: run test bench setup system clean
+
+run: setup
+	$(VENV)/bin/soilbin run $(SCENE) --out $(OUT)
+
+test: setup
+	$(PY) -m pytest -q tests
+
+bench: setup
+	$(PY) scripts/benchmark.py --readme README.md
+
+setup: system $(STAMP)
+
+system:
+	@sh scripts/install-system.sh
+
+$(STAMP): pyproject.toml
+	/usr/bin/python3 -m venv --system-site-packages $(VENV)
+	$(PY) -m pip install --quiet --no-build-isolation --no-deps -e .
+	touch $@
+
+clean:
+	rm -rf $(VENV) runs .pytest_cache

@@ -1,0 +1,128 @@
+"""Typed, range-checked parameter records built from TOML tables.
+
+A parameter record is a frozen dataclass whose fields are declared with
+:func:`param`; ranges are checked on construction, so a record that exists
+is valid. :func:`from_table` builds a record from a TOML table and names the
+offending key (with its dotted path in the scene) when a key is unknown,
+missing, of the wrong type or out of range.
+"""
+import dataclasses
+import enum
+import math
+import typing
+
+from .errors import InputError
+
+
+@dataclasses.dataclass(frozen=True)
+class Range:
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+
+    def contains(self, x):
+        above = x > self.lo if self.lo_open else x >= self.lo
+        below = x < self.hi if self.hi_open else x <= self.hi
+        return above and below
+
+    def __str__(self):
+        lo = "(" if self.lo_open else "["
+        hi = ")" if self.hi_open else "]"
+        return f"{lo}{self.lo:g}, {self.hi:g}{hi}"
+
+
+def param(default=dataclasses.MISSING, *, lo=-math.inf, hi=math.inf,
+          lo_open=False, hi_open=False, doc=""):
+    """A dataclass field with an accepted range (numbers only) and a doc line."""
+    meta = {"doc": doc}
+    if lo != -math.inf or hi != math.inf:
+        meta["range"] = Range(lo, hi, lo_open, hi_open)
+    if isinstance(default, (list, dict)):
+        raise TypeError("use a tuple for a sequence default")
+    return dataclasses.field(default=default, metadata=meta)
+
+
+class Params:
+    """Mixin: range checks on construction. Subclasses are frozen dataclasses."""
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            rng = f.metadata.get("range")
+            value = getattr(self, f.name)
+            if rng is not None and not rng.contains(value):
+                raise InputError(f"{f.name} = {value!r} is outside the accepted range {rng}")
+
+
+def _coerce(value, tp, where):
+    """Convert a TOML value to the field type ``tp`` or raise InputError."""
+    origin = typing.get_origin(tp)
+    if tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"{where}: expected a number, got {value!r}")
+        return float(value)
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InputError(f"{where}: expected an integer, got {value!r}")
+        return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise InputError(f"{where}: expected true or false, got {value!r}")
+        return value
+    if tp is str:
+        if not isinstance(value, str):
+            raise InputError(f"{where}: expected a string, got {value!r}")
+        return value
+    if isinstance(tp, type) and issubclass(tp, enum.Enum):
+        choices = [m.value for m in tp]
+        if value not in choices:
+            raise InputError(f"{where}: {value!r} is not one of {', '.join(map(str, choices))}")
+        return tp(value)
+    if origin is tuple:
+        (item,) = set(typing.get_args(tp)) - {Ellipsis}
+        if not isinstance(value, (list, tuple)):
+            raise InputError(f"{where}: expected a list, got {value!r}")
+        return tuple(_coerce(v, item, f"{where}[{i}]") for i, v in enumerate(value))
+    if dataclasses.is_dataclass(tp):
+        return from_table(tp, value, where)
+    raise TypeError(f"unsupported parameter type {tp!r} at {where}")
+
+
+def from_table(cls, table, where):
+    """Build the record ``cls`` from a TOML table; ``where`` is its dotted path."""
+    if not isinstance(table, dict):
+        raise InputError(f"{where}: expected a table, got {table!r}")
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    unknown = sorted(set(table) - set(fields))
+    if unknown:
+        raise InputError(f"{where}: unknown key {unknown[0]!r}; accepted keys: {', '.join(fields)}")
+    kwargs = {}
+    for name, f in fields.items():
+        if name in table:
+            kwargs[name] = _coerce(table[name], hints[name], f"{where}.{name}")
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise InputError(f"{where}: missing key {name!r}")
+    try:
+        return cls(**kwargs)
+    except InputError as err:
+        raise InputError(f"{where}.{err}") from None
+
+
+def describe(cls):
+    """Lines 'name: type, range, default - doc' for --help and the README."""
+    hints = typing.get_type_hints(cls)
+    lines = []
+    for f in dataclasses.fields(cls):
+        tp = hints[f.name]
+        name = tp.__name__ if isinstance(tp, type) else str(tp)
+        parts = [f"{f.name} ({name}"]
+        if "range" in f.metadata:
+            parts.append(f", in {f.metadata['range']}")
+        if f.default is not dataclasses.MISSING:
+            default = f.default.value if isinstance(f.default, enum.Enum) else f.default
+            parts.append(f", default {default!r}")
+        parts.append(")")
+        doc = f.metadata.get("doc", "")
+        lines.append("".join(parts) + (f": {doc}" if doc else ""))
+    return lines
