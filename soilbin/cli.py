@@ -1,0 +1,108 @@
+"""The soilbin command line: run a scene, list the scenes."""
+import argparse
+import json
+import logging
+import sys
+from pathlib import Path
+
+from .errors import SoilbinError
+
+SCENES_DIR = Path(__file__).resolve().parent.parent / "scenes"
+
+EPILOG = """\
+examples:
+  soilbin list
+  soilbin run scenes/strip-footing-von-mises.toml
+  soilbin run column-elastic --set materials.soil.E=5000 --set loading.magnitude=20
+  soilbin run block-drucker-prager --json --out /tmp/block
+
+exit status: 0 done (a force-controlled run that stops at collapse with
+loading.until_collapse = true counts as done), 1 the run could not reach the
+full load (converged steps are on disk), 2 bad input.
+"""
+
+
+def _scene_path(arg):
+    """A scene file path, or the name of a scene in the project's scenes/ folder."""
+    path = Path(arg)
+    if path.exists() or path.suffix == ".toml":
+        return path
+    return SCENES_DIR / f"{arg}.toml"
+
+
+def _parser():
+    parser = argparse.ArgumentParser(
+        prog="soilbin", description="Geometric and material nonlinear finite element analysis "
+        "of soil-structure interaction (DOLFINx).",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    run = sub.add_parser("run", help="solve a scene", description=(
+        "Solve a scene and write its run folder: scene.toml (resolved), curve.csv (one row per "
+        "converged step), summary.json and fields.xdmf (ParaView)."),
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    run.add_argument("scene", help="scene file, or the name of a scene in scenes/ (see 'soilbin list')")
+    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a scene value, e.g. materials.soil.E=5000 (repeatable); "
+                          "checked like the file")
+    run.add_argument("--out", type=Path, help="run folder (default: runs/<scene name>)")
+    run.add_argument("--json", action="store_true",
+                     help="no progress lines; the last stdout line is the summary as one JSON object")
+
+    sub.add_parser("list", help="list the scenes in scenes/ with their titles",
+                   description="List the scenes shipped in the project's scenes/ folder.")
+    return parser
+
+
+def _list_scenes():
+    from .scene import read_toml
+    for path in sorted(SCENES_DIR.glob("*.toml")):
+        title = read_toml(path).get("title", "")
+        print(f"{path.stem:32s} {title}")
+    return 0
+
+
+def _progress(record, area):
+    print(f"step {record.step:3d}  load factor {record.load_factor:8.4f}  "
+          f"displacement {record.displacement:11.5g}  force {record.force:11.5g}  "
+          f"pressure {record.force / area:11.5g}  Newton {record.newton_iterations:2d}"
+          + (f"  cuts {record.cuts}" if record.cuts else "")
+          + f"  {record.wall_s:7.2f} s", file=sys.stderr, flush=True)
+
+
+def _run(args):
+    from mpi4py import MPI
+    from .scene import load_scene
+    from .run import run_scene
+
+    scene = load_scene(_scene_path(args.scene), args.overrides)
+    out = args.out or Path("runs") / scene.name
+    rank0 = MPI.COMM_WORLD.rank == 0
+    summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress)
+    if rank0:
+        if args.json:
+            print(json.dumps(summary))
+        else:
+            print(f"{summary['status']}: {summary['n_steps']} steps, "
+                  f"{summary['newton_iterations']} Newton iterations, {summary['wall_s']} s; "
+                  f"results in {out}", file=sys.stderr)
+            for key in scene.headline:
+                print(f"{key} = {summary[key]}")
+        if summary["message"]:
+            print(f"soilbin: {summary['message']}", file=sys.stderr)
+    return 0 if summary["converged"] else 1
+
+
+def main(argv=None):
+    args = _parser().parse_args(argv)
+    import dolfinx  # noqa: F401  (configures logging; then quieten the JIT's INFO lines)
+    logging.getLogger().setLevel(logging.WARNING)
+    try:
+        return _list_scenes() if args.command == "list" else _run(args)
+    except SoilbinError as err:
+        print(f"soilbin: error: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,69 @@
+"""Finite element spaces: displacement, optionally with a mean-dilatation pair.
+
+Plane-strain plastic flow of von Mises soil is isochoric, which locks a plain
+displacement element. The ``-bbar`` elements add a discontinuous dilatation
+θ and pressure p (three-field Hu–Washizu, Simo, Taylor & Pister 1985): with
+P0 fields on trilinear bricks this is exactly the B-bar / mean-dilatation
+brick of Nagtegaal, Parks & Rice (1974); on triquadratic bricks the P1-disc
+pair gives the LBB-stable Q2/P1 element. θ and p are cell-local, so they add
+only cell-interior unknowns to the direct solve.
+"""
+import dataclasses
+import enum
+
+import ufl
+from dolfinx import fem
+
+
+class Element(enum.Enum):
+    HEX8 = "hex8"
+    HEX8_BBAR = "hex8-bbar"
+    HEX27 = "hex27"
+    HEX27_BBAR = "hex27-bbar"
+
+    @property
+    def degree(self):
+        return 1 if self in (Element.HEX8, Element.HEX8_BBAR) else 2
+
+    @property
+    def mixed(self):
+        return self in (Element.HEX8_BBAR, Element.HEX27_BBAR)
+
+    @property
+    def quadrature_degree(self):
+        """Gauss rule: 2x2x2 points for trilinear, 3x3x3 for triquadratic."""
+        return 2 * self.degree
+
+
+@dataclasses.dataclass(frozen=True)
+class Discretisation:
+    element: Element
+    space: fem.FunctionSpace          # the unknown's space (mixed or vector)
+    displacement_space: fem.FunctionSpace  # view of the displacement block
+
+    @classmethod
+    def create(cls, mesh, element):
+        cell = mesh.ufl_cell()
+        ve = ufl.VectorElement("Lagrange", cell, element.degree)
+        if not element.mixed:
+            space = fem.FunctionSpace(mesh, ve)
+            return cls(element, space, space)
+        # P0 with trilinear, P1-disc (family "DPC") with triquadratic bricks
+        pe = (ufl.FiniteElement("DG", cell, 0) if element.degree == 1
+              else ufl.FiniteElement("DPC", cell, 1))
+        space = fem.FunctionSpace(mesh, ufl.MixedElement([ve, pe, pe]))
+        return cls(element, space, space.sub(0))
+
+    @property
+    def mesh(self):
+        return self.space.mesh
+
+    def measure(self, **kwargs):
+        """The cell measure whose rule matches the quadrature spaces."""
+        q = self.element.quadrature_degree
+        return ufl.dx(domain=self.mesh, metadata={"quadrature_degree": q,
+                                                   "quadrature_scheme": "default"}, **kwargs)
+
+    def displacement(self, w):
+        """Displacement part of a function, trial or test function of ``space``."""
+        return ufl.split(w)[0] if self.element.mixed else w

@@ -1,0 +1,81 @@
+"""A DOLFINx mesh with named cell and facet groups, meshed by gmsh on rank 0."""
+import itertools
+from dataclasses import dataclass
+from typing import Callable
+
+import dolfinx.cpp.mesh
+import dolfinx.mesh
+import gmsh
+from dolfinx.io import gmshio
+from mpi4py import MPI
+
+#: gmsh element type of the 8-node hexahedron.
+HEXAHEDRON = 5
+
+#: Group name -> gmsh entity tags (volumes for regions, surfaces for boundaries).
+Groups = dict[str, list[int]]
+
+
+@dataclass(frozen=True)
+class TaggedMesh:
+    """A mesh, its cell and facet tags, and the tag of each named group."""
+
+    mesh: dolfinx.mesh.Mesh
+    cell_tags: dolfinx.cpp.mesh.MeshTags_int32
+    facet_tags: dolfinx.cpp.mesh.MeshTags_int32
+    regions: dict[str, int]     # cell group name -> tag
+    boundaries: dict[str, int]  # facet group name -> tag
+
+
+def build_tagged_mesh(comm: MPI.Comm, name: str,
+                      geometry: Callable[[], tuple[Groups, Groups]]) -> TaggedMesh:
+    """Mesh the gmsh model made by ``geometry`` on rank 0 and distribute it.
+
+    ``geometry`` builds and synchronizes the model and returns the volumes of
+    each region and the surfaces of each boundary. Groups are tagged 1, 2, ...
+    in that order, regions first, so no two groups share a tag.
+    """
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        if comm.rank == 0:
+            groups = None
+            try:
+                gmsh.model.add(name)
+                groups = _mesh_hexahedra(*geometry())
+            finally:
+                comm.bcast(groups, root=0)  # None tells the other ranks to stop
+        else:
+            groups = comm.bcast(None, root=0)
+            if groups is None:
+                raise RuntimeError(f"gmsh failed to mesh {name!r} on rank 0")
+        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
+    finally:
+        gmsh.finalize()
+    return TaggedMesh(mesh, cell_tags, facet_tags, *groups)
+
+
+def _mesh_hexahedra(regions: Groups, boundaries: Groups) -> tuple[dict[str, int], dict[str, int]]:
+    """Add the physical groups, mesh in 3D, and check that only hexahedra were made."""
+    unassigned = {t for _, t in gmsh.model.getEntities(3)} - set().union(*regions.values())
+    if unassigned:
+        raise RuntimeError(f"volumes {sorted(unassigned)} are in no region; their cells would be lost")
+    numbers = itertools.count(1)
+    tags = _add_physical_groups(3, regions, numbers), _add_physical_groups(2, boundaries, numbers)
+    gmsh.model.mesh.generate(3)
+    types = list(gmsh.model.mesh.getElementTypes(3))
+    if types != [HEXAHEDRON]:
+        made = ", ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
+        raise RuntimeError(f"gmsh made 3D elements [{made}]; only 8-node hexahedra are supported")
+    return tags
+
+
+def _add_physical_groups(dim: int, groups: Groups, numbers) -> dict[str, int]:
+    """One named physical group per entry, numbered by ``numbers``; name -> tag."""
+    tags = {}
+    for group, entities in groups.items():
+        if not entities:
+            raise RuntimeError(f"physical group {group!r} has no entities")
+        tags[group] = gmsh.model.addPhysicalGroup(dim, entities, next(numbers))
+        gmsh.model.setPhysicalName(dim, tags[group], group)
+    return tags

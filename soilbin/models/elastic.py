@@ -1,0 +1,61 @@
+"""Isotropic linear elasticity: C_e = 3K P_vol + 2G P_dev."""
+import dataclasses
+import math
+
+import numpy as np
+
+from ..params import param
+from ..tensors import P_DEV, P_VOL
+from .base import Model
+
+
+def elastic_stiffness(K, G):
+    """6x6 Mandel stiffness 3K P_vol + 2G P_dev."""
+    return 3.0 * K * P_VOL + 2.0 * G * P_DEV
+
+
+@dataclasses.dataclass(frozen=True)
+class IsotropicElasticity(Model):
+    """Base of every model whose elastic part is isotropic and linear."""
+
+    E: float = param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True, doc="Young's modulus")
+    nu: float = param(lo=-1.0, hi=0.5, lo_open=True, hi_open=True, doc="Poisson's ratio")
+
+    @property
+    def K(self):
+        """Bulk modulus."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+    @property
+    def G(self):
+        """Shear modulus."""
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def stiffness(self):
+        return elastic_stiffness(self.K, self.G)
+
+    @property
+    def compliance(self):
+        return P_VOL / (3.0 * self.K) + P_DEV / (2.0 * self.G)
+
+    def trial(self, deps, stress):
+        """Elastic predictor sigma_n + C_e : deps."""
+        return stress + deps @ self.stiffness
+
+    def equivalent_plastic_strain(self, deps, dsigma):
+        """sqrt(2/3) |deps_p| with deps_p = deps - C_e^-1 : dsigma."""
+        deps_p = deps - dsigma @ self.compliance
+        return np.sqrt(2.0 / 3.0) * np.linalg.norm(deps_p, axis=-1)
+
+
+@dataclasses.dataclass(frozen=True)
+class LinearElastic(IsotropicElasticity):
+    """Isotropic linear elastic material."""
+
+    linear = True
+
+    def integrate(self, deps, state):
+        sigma = self.trial(deps, state["stress"])
+        tangent = np.repeat(self.stiffness[None], len(sigma), axis=0)
+        return sigma, tangent, {"stress": sigma}

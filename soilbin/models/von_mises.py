@@ -1,0 +1,19 @@
+"""Perfectly plastic von Mises, sqrt(J2) = c (dissertation eq. B.1): the
+Drucker–Prager cone with eta = 0, so in plane strain the Tresca strength is c."""
+import dataclasses
+import math
+
+from ..params import param
+from .cone import ConeModel
+
+
+@dataclasses.dataclass(frozen=True)
+class VonMises(ConeModel):
+    """f = sqrt(J2) - c."""
+
+    c: float = param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True,
+                     doc="undrained shear strength")
+
+    @property
+    def cone(self):
+        return 0.0, self.c

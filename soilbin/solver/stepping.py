@@ -1,0 +1,63 @@
+"""Incremental loading with step cutting.
+
+The load factor goes from 0 to 1 in the scene's equal steps. A step whose
+Newton solve fails is rolled back and halved, at most ``max_cuts`` times in
+a row; after a converged step the increment grows back (doubling) toward the
+nominal one. Every converged step is handed to ``on_step`` at once, so a run
+that stops early leaves all its converged steps behind.
+"""
+import dataclasses
+import time
+
+from ..errors import ConvergenceError
+
+
+@dataclasses.dataclass(frozen=True)
+class StepRecord:
+    step: int
+    load_factor: float
+    displacement: float
+    force: float
+    newton_iterations: int
+    cuts: int
+    wall_s: float
+    residuals: tuple
+
+
+@dataclasses.dataclass(frozen=True)
+class StepperResult:
+    steps: tuple
+    complete: bool          # reached load factor 1
+    message: str            # why it stopped early ('' when complete)
+
+
+def run_load_steps(problem, steps, max_cuts, on_step, clock=time.perf_counter):
+    """Drive ``problem`` (set_load_factor / solve / commit / roll_back / observe) to factor 1."""
+    nominal = 1.0 / steps
+    increment, factor, cuts = nominal, 0.0, 0
+    records, start = [], clock()
+    while factor < 1.0 - 1e-12:
+        increment = min(increment, 1.0 - factor)
+        problem.set_load_factor(factor + increment)
+        try:
+            result = problem.solve()
+        except ConvergenceError as err:
+            problem.roll_back()
+            if cuts == max_cuts:
+                return StepperResult(tuple(records), False,
+                                     f"step to load factor {factor + increment:.6g} failed after "
+                                     f"{cuts} cuts ({err})")
+            cuts += 1
+            increment /= 2.0
+            continue
+        factor += increment
+        problem.commit()
+        displacement, force = problem.observe()
+        record = StepRecord(len(records) + 1, factor, displacement, force,
+                            result.iterations, cuts, clock() - start, result.residuals)
+        records.append(record)
+        on_step(record)
+        if cuts == 0:
+            increment = min(2.0 * increment, nominal)
+        cuts = 0
+    return StepperResult(tuple(records), True, "")
