@@ -1,4 +1,6 @@
 """The soilbin command line: run a scene, list the scenes."""
+import os
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # before NumPy/PETSc load BLAS: threads fight MPI ranks
 import argparse
 import json
 import logging

@@ -58,7 +58,11 @@ class SoilProblem:
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))   # traction or displacement
         loaded_dofs = fem.locate_dofs_topological(V.sub(loading.direction.axis), tdim - 1,
                                                   facets(loading.boundary))
+        # Load factor 1 is the traction magnitude along the direction, or the
+        # displacement of the loaded component (signed by the direction).
+        self._full_load = loading.magnitude
         if loading.control is Control.DISPLACEMENT:
+            self._full_load *= loading.direction.vector[loading.direction.axis]
             bcs.append(fem.dirichletbc(self._load, loaded_dofs, V.sub(loading.direction.axis)))
         else:
             residual -= self._load * ufl.dot(direction, disc.displacement(v)) * ds_load
@@ -86,7 +90,7 @@ class SoilProblem:
         return imap.size_global * self.disc.space.dofmap.index_map_bs
 
     def set_load_factor(self, factor):
-        self._load.value = factor * self.scene.loading.magnitude
+        self._load.value = factor * self._full_load
 
     def solve(self):
         """Equilibrium at the current load factor, starting from the last committed state."""

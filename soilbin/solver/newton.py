@@ -41,6 +41,7 @@ class NewtonSolver:
         self._b = fem.petsc.create_vector(self._L)
         self._A = fem.petsc.create_matrix(self._a)
         self._x = w.vector.duplicate()
+        self._gap = w.vector.duplicate()
         self._force_scale = 0.0
         self._error = None
         self._residuals = []
@@ -72,9 +73,17 @@ class NewtonSolver:
             b.set(np.nan)
             return
         fem.petsc.assemble_vector(b, self._L)
-        fem.petsc.apply_lifting(b, [self._a], bcs=[self._bcs], x0=[x], scale=-1.0)
+        if self._bc_mismatch(x):   # first iterate of a displacement step: lift g - x
+            fem.petsc.apply_lifting(b, [self._a], bcs=[self._bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
+
+    def _bc_mismatch(self, x):
+        """Whether x misses a prescribed value (else the lifting term is zero)."""
+        with self._gap.localForm() as gap:
+            gap.set(0.0)
+        fem.petsc.set_bc(self._gap, self._bcs, x, 1.0)
+        return self._gap.norm(PETSc.NormType.NORM_INFINITY) > 0.0
 
     def _J(self, snes, x, A, P):
         A.zeroEntries()

@@ -46,6 +46,7 @@ class MaterialPoints:
         # Position of each evaluated point (cell-major, as Expression.eval) in the Functions.
         self._slot = self.stress.function_space.dofmap.list.array
         # Strain increment from the last committed state, Δε̄ = ε̄(w) - ε̄(w_n).
+        self._w, self._w_committed = w, w_committed
         self._deps = fem.Expression(
             ufl_mandel(enhanced_strain(disc, w)) - ufl_mandel(enhanced_strain(disc, w_committed)),
             points)
@@ -66,8 +67,10 @@ class MaterialPoints:
         self._tangent = np.zeros((n_points, 6, 6))
         for name, state in self.committed.items():
             self._stress[self.index[name]] = state["stress"]
-        self.write(self._stress, self.stress)
         self._tangent_frozen = False
+        self._converged_tangent = None
+        self.update()   # zero increment: the initial stress and the elastic tangent
+        self._converged_tangent = self._tangent.copy()
 
     def write(self, values, function):
         """Copy per-point values (n_points, ...), in evaluation order, into a quadrature Function."""
@@ -79,7 +82,20 @@ class MaterialPoints:
         return self._deps.eval(self._cells).reshape(-1, 6)
 
     def update(self):
-        """One constitutive update at the current iterate: σ, C_tan and trial history."""
+        """One constitutive update at the current iterate: σ, C_tan and trial history.
+
+        At the committed state itself (the first iterate of a load step) the
+        stress is the committed one and the tangent the last converged one, so
+        Newton's first correction is elasto-plastic rather than elastic.
+        """
+        if self._at_committed_state():
+            self.trial = dict(self.committed)
+            for name, idx in self.index.items():
+                self._stress[idx] = self.committed[name]["stress"]
+            self.write(self._stress, self.stress)
+            if not self._tangent_frozen:
+                self.write(self._converged_tangent, self.tangent)
+            return
         deps = self.strain_increment()
         for name, idx in self.index.items():
             sigma, tangent, state = self.models[name].update(deps[idx], self.committed[name])
@@ -93,9 +109,15 @@ class MaterialPoints:
             # Linear models have a constant tangent: write it once.
             self._tangent_frozen = all(m.linear for m in self.models.values())
 
+    def _at_committed_state(self):
+        return (self._converged_tangent is not None
+                and np.array_equal(self._w.x.array, self._w_committed.x.array))
+
     def commit(self):
         """The trial history of the converged iterate becomes the committed history."""
         self.committed = dict(self.trial)
+        if not self._tangent_frozen:
+            self._converged_tangent = self._tangent.copy()
 
     def history(self, key):
         """A committed history variable over all local points (n_points, ...), zero where absent."""
