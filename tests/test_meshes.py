@@ -1,12 +1,13 @@
-"""Mesh builders: volumes, face areas, face locations, element counts and grading."""
+"""Mesh builders: volumes, face areas, face locations, element counts, sizes and grading."""
 import dataclasses
+import re
 
 import gmsh
 import numpy as np
 import pytest
 import ufl
 from dolfinx import fem
-from dolfinx.mesh import locate_entities
+from dolfinx.mesh import CellType, locate_entities
 from mpi4py import MPI
 
 from soilbin.errors import InputError
@@ -54,11 +55,36 @@ def face_areas(tm):
     return {name: total(one * ds(tag)) for name, tag in tm.boundaries.items()}
 
 
-def cell_boxes(tm):
-    """Lower corner and extent in x, y, z of each owned cell (all cells are axis-aligned boxes)."""
+def in_plane_quads(tm):
+    """Front quadrilateral (x, z corners, counter-clockwise) of each owned hexahedron."""
     owned = tm.mesh.topology.index_map(3).size_local
     nodes = tm.mesh.geometry.x[tm.mesh.geometry.dofmap.array.reshape(-1, 8)[:owned]]
-    return nodes.min(axis=1), np.ptp(nodes, axis=1)
+    front = np.isclose(nodes[:, :, 1], 0.0)
+    assert (front.sum(axis=1) == 4).all()         # so also 4 at the back: one layer
+    quads = nodes[front].reshape(owned, 4, 3)[:, :, [0, 2]]
+    centre = quads.mean(axis=1, keepdims=True)
+    angle = np.arctan2(*(quads - centre).T[::-1]).T
+    return np.take_along_axis(quads, np.argsort(angle, axis=1)[:, :, None], axis=1)
+
+
+def sizes_and_distances(tm):
+    """In-plane size (square root of the quad's area) of each owned cell, and its centroid's
+    distance r from the footing edge (b, 0)."""
+    quads = in_plane_quads(tm)
+    x, z = quads[..., 0], quads[..., 1]
+    area = 0.5 * (x * np.roll(z, -1, axis=1) - np.roll(x, -1, axis=1) * z).sum(axis=1)
+    assert (area > 0).all()
+    centre = quads.mean(axis=1)
+    return np.sqrt(area), np.hypot(centre[:, 0] - B, centre[:, 1])
+
+
+def gathered(a):
+    return np.concatenate(COMM.allgather(np.asarray(a)))
+
+
+def h(r, p=SLAB):
+    """The size field the builder asks gmsh for."""
+    return np.minimum(p.edge_size + p.size_growth * r, p.far_size) / p.refine
 
 
 def assert_faces_on(tm, where):
@@ -90,53 +116,91 @@ def test_box_defaults_are_a_column():
     assert num_cells(build("box")) == 4
 
 
-def test_slab_volume_faces_and_cells(slab):
-    w, d, t = SLAB.width, SLAB.depth, SLAB.thickness
-    volume = total(fem.Constant(slab.mesh, 1.0) * ufl.dx(domain=slab.mesh))
+ODD = dict(footing_width=3.0, width=6.0, depth=4.0, thickness=0.5,
+           edge_size=0.05, far_size=0.5, size_growth=0.3)
+
+
+@pytest.mark.parametrize("values", [{}, ODD], ids=["defaults", "odd"])
+def test_slab_volume_faces_and_one_layer_of_hexahedra(values, slab):
+    p = StripFootingParams(**values)
+    tm = build("strip_footing", **values) if values else slab
+    b, w, d, t = p.footing_width / 2, p.width, p.depth, p.thickness
+    volume = total(fem.Constant(tm.mesh, 1.0) * ufl.dx(domain=tm.mesh))
     assert volume == pytest.approx(w * d * t)
-    assert face_areas(slab) == pytest.approx({
-        "footing": B * t, "surface": (w - B) * t, "symmetry": d * t, "far": d * t,
+    assert face_areas(tm) == pytest.approx({
+        "footing": b * t, "surface": (w - b) * t, "symmetry": d * t, "far": d * t,
         "base": w * t, "front": w * d, "back": w * d})
-    assert num_cells(slab) == (SLAB.n_footing + SLAB.n_beside) * SLAB.n_depth == 768
     tol = 1e-9
-    assert_faces_on(slab, {
-        "footing": lambda x: np.isclose(x[2], 0.0) & (x[0] <= B + tol),
-        "surface": lambda x: np.isclose(x[2], 0.0) & (x[0] >= B - tol),
+    assert_faces_on(tm, {
+        "footing": lambda x: np.isclose(x[2], 0.0) & (x[0] <= b + tol),
+        "surface": lambda x: np.isclose(x[2], 0.0) & (x[0] >= b - tol),
         "symmetry": lambda x: np.isclose(x[0], 0.0), "far": lambda x: np.isclose(x[0], w),
         "base": lambda x: np.isclose(x[2], -d),
         "front": lambda x: np.isclose(x[1], 0.0), "back": lambda x: np.isclose(x[1], t)})
+    # hexahedra, one layer: every vertex on the front or the back, one front and one back
+    # facet per cell, and each cell has 4 vertices on each (checked in in_plane_quads)
+    assert tm.mesh.topology.cell_type == CellType.hexahedron
+    y = tm.mesh.geometry.x[:, 1]
+    assert (np.isclose(y, 0.0) | np.isclose(y, t)).all()
+    owned_facets = tm.mesh.topology.index_map(2).size_local
+    for side in ("front", "back"):
+        facets = tm.facet_tags.find(tm.boundaries[side])
+        assert COMM.allreduce(np.count_nonzero(facets < owned_facets), op=MPI.SUM) == num_cells(tm)
+    in_plane_quads(tm)
 
 
-def test_refine_quadruples_cells_and_halves_sizes(slab, slab2):
-    assert num_cells(slab2) == 4 * num_cells(slab)
-    smallest = [COMM.allreduce(cell_boxes(tm)[1][:, 0].min(), op=MPI.MIN) for tm in (slab, slab2)]
-    # first size of a geometric progression: refining by 2 scales it by 1 / (1 + sqrt(growth))
-    assert smallest[1] / smallest[0] == pytest.approx(1.0 / (1.0 + np.sqrt(SLAB.growth)))
+def test_refine_2_gives_about_4x_the_cells(slab, slab2):
+    assert 3.0 < num_cells(slab2) / num_cells(slab) < 5.0
 
 
-@pytest.mark.parametrize("tm_name", ["slab", "slab2"])
-def test_slab_is_graded_toward_footing_edge(tm_name, request):
-    corner, size = cell_boxes(request.getfixturevalue(tm_name))
-    area = size[:, 0] * size[:, 2]
-    at_edge = np.isclose(corner[:, 2] + size[:, 2], 0.0) & (
-        np.isclose(corner[:, 0], B) | np.isclose(corner[:, 0] + size[:, 0], B))
-    smallest_at_edge = COMM.allreduce(area[at_edge].min(initial=np.inf), op=MPI.MIN)
-    smallest_elsewhere = COMM.allreduce(area[~at_edge].min(initial=np.inf), op=MPI.MIN)
-    assert smallest_at_edge < smallest_elsewhere
-    aspect = COMM.allreduce((size[:, [0, 2]].max(axis=1) / size[:, [0, 2]].min(axis=1)).max(), op=MPI.MAX)
-    assert aspect < 10.0
+@pytest.mark.parametrize("tm_name, refine", [("slab", 1), ("slab2", 2)])
+def test_smallest_cells_are_at_the_footing_edge(tm_name, refine, request):
+    size, r = sizes_and_distances(request.getfixturevalue(tm_name))
+    edge_size = SLAB.edge_size / refine
+    # the cell nearest to the edge (over all ranks) has about the edge size
+    nearest = min(COMM.allgather((r.min(initial=np.inf), size[r.argmin()] if r.size else np.inf)))
+    assert nearest[0] < edge_size
+    assert 0.5 * edge_size < nearest[1] < 2.0 * edge_size
+    # no cell is much smaller, and the smallest lies where h(r) < 2 edge_size
+    smallest = min(COMM.allgather((size.min(initial=np.inf), r[size.argmin()] if r.size else np.inf)))
+    assert smallest[0] > 0.5 * edge_size
+    assert smallest[1] < SLAB.edge_size / SLAB.size_growth
+    # cells away from the edge are several times larger
+    for distance, factor in [(1.0, 4.0), (5.0, 15.0)]:
+        farther = COMM.allreduce(size[r >= distance].min(initial=np.inf), op=MPI.MIN)
+        assert farther > factor * edge_size, distance
+
+
+@pytest.mark.parametrize("tm_name, refine", [("slab", 1), ("slab2", 2)])
+def test_cell_sizes_follow_the_size_field(tm_name, refine, request):
+    size, r = sizes_and_distances(request.getfixturevalue(tm_name))
+    ratio = gathered(size / h(r, dataclasses.replace(SLAB, refine=refine)))
+    assert ratio.size == num_cells(request.getfixturevalue(tm_name))
+    assert 0.5 <= np.median(ratio) <= 2.0
+    assert np.mean((ratio >= 0.5) & (ratio <= 2.0)) >= 0.95
+    # the field saturates: the largest cells are about far_size, none much larger
+    largest = COMM.allreduce(size.max(initial=0.0), op=MPI.MAX)
+    assert 0.5 * SLAB.far_size / refine < largest < 2.0 * SLAB.far_size / refine
 
 
 @pytest.mark.parametrize("name, values, culprit", [
     ("strip_footing", {"width": -1.0}, "mesh.width"),
-    ("strip_footing", {"growth": 0.9}, "mesh.growth"),
+    ("strip_footing", {"depth": 0.0}, "mesh.depth"),
+    ("strip_footing", {"thickness": -0.5}, "mesh.thickness"),
+    ("strip_footing", {"edge_size": -0.02}, "mesh.edge_size"),
+    ("strip_footing", {"far_size": -1.0}, "mesh.far_size"),
+    ("strip_footing", {"edge_size": 2.0}, "mesh.edge_size"),                    # > far_size
+    ("strip_footing", {"edge_size": 0.5, "far_size": 0.4}, "mesh.edge_size"),
+    ("strip_footing", {"size_growth": 0.0}, "mesh.size_growth"),
+    ("strip_footing", {"size_growth": -0.1}, "mesh.size_growth"),
     ("strip_footing", {"refine": 0}, "mesh.refine"),
+    ("strip_footing", {"footing_width": 20.0}, "mesh.footing_width"),           # = 2 width
     ("strip_footing", {"footing_width": 30.0}, "mesh.footing_width"),
     ("box", {"lz": 0.0}, "mesh.lz"),
     ("box", {"nx": 0}, "mesh.nx"),
 ])
 def test_out_of_range_parameter_is_named(name, values, culprit):
-    with pytest.raises(InputError, match=culprit):
+    with pytest.raises(InputError, match=rf"^{re.escape(culprit)} = "):
         from_table(BUILDERS[name].params, values, "mesh")
 
 

@@ -1,9 +1,10 @@
 """Incremental loading with step cutting.
 
 The load factor goes from 0 to 1 in the scene's equal steps. A step whose
-Newton solve fails is rolled back and halved, at most ``max_cuts`` times in
-a row; after a converged step the increment grows back (doubling) toward the
-nominal one. Every converged step is handed to ``on_step`` at once, so a run
+Newton solve fails is rolled back and halved; the increment never goes below
+the nominal one over 2**max_cuts, which ends the run (under force control,
+at the collapse load to that resolution). After a step that converged
+without a cut the increment doubles back toward the nominal one. Every converged step is handed to ``on_step`` at once, so a run
 that stops early leaves all its converged steps behind.
 """
 import dataclasses
@@ -34,21 +35,21 @@ class StepperResult:
 def run_load_steps(problem, steps, max_cuts, on_step, clock=time.perf_counter):
     """Drive ``problem`` (set_load_factor / solve / commit / roll_back / observe) to factor 1."""
     nominal = 1.0 / steps
-    increment, factor, cuts = nominal, 0.0, 0
+    level, factor, cuts = 0, 0.0, 0      # increment = nominal / 2**level
     records, start = [], clock()
     while factor < 1.0 - 1e-12:
-        increment = min(increment, 1.0 - factor)
+        increment = min(nominal / 2**level, 1.0 - factor)
         problem.set_load_factor(factor + increment)
         try:
             result = problem.solve()
         except ConvergenceError as err:
             problem.roll_back()
-            if cuts == max_cuts:
+            if level == max_cuts:
                 return StepperResult(tuple(records), False,
-                                     f"step to load factor {factor + increment:.6g} failed after "
-                                     f"{cuts} cuts ({err})")
+                                     f"step to load factor {factor + increment:.6g} failed with the "
+                                     f"smallest increment, 1/{steps * 2**max_cuts} ({err})")
             cuts += 1
-            increment /= 2.0
+            level += 1
             continue
         factor += increment
         problem.commit()
@@ -58,6 +59,6 @@ def run_load_steps(problem, steps, max_cuts, on_step, clock=time.perf_counter):
         records.append(record)
         on_step(record)
         if cuts == 0:
-            increment = min(2.0 * increment, nominal)
+            level = max(level - 1, 0)
         cuts = 0
     return StepperResult(tuple(records), True, "")

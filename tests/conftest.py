@@ -1,0 +1,38 @@
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "scenes"
+SOILBIN = Path(sys.executable).parent / "soilbin"
+
+
+@pytest.fixture
+def solve(tmp_path):
+    """solve(scene_name, *overrides) -> (summary, run folder), in this process."""
+    from soilbin.run import run_scene
+    from soilbin.scene import load_scene
+
+    def _solve(name, *overrides):
+        scene = load_scene(SCENES / f"{name}.toml", overrides)
+        out = tmp_path / name
+        return run_scene(scene, out), out
+    return _solve
+
+
+def soilbin_cli(*args, mpi_ranks=None, cwd=None):
+    """Run the installed command line; returns the CompletedProcess."""
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+    cmd = [str(SOILBIN), *map(str, args)]
+    if mpi_ranks:
+        cmd = ["mpirun", "-n", str(mpi_ranks), sys.executable, "-m", "soilbin.cli", *map(str, args)]
+    return subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd, timeout=600)
+
+
+def last_json(stdout):
+    return json.loads(stdout.strip().splitlines()[-1])

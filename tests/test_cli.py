@@ -1,0 +1,102 @@
+"""The command line: bad input is a short message and exit status 2, never a traceback."""
+import json
+
+import pytest
+
+from soilbin.cli import main
+from conftest import SCENES, last_json, soilbin_cli
+
+BLOCK = str(SCENES / "block-drucker-prager.toml")
+
+
+def run_main(capsys, *args):
+    status = main(list(args))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["run", "no/such/scene.toml"], "no such scene file"),
+    (["run", BLOCK, "--set", "materials.soil.nu=0.5"], "materials.soil.nu = 0.5 is outside the accepted range (-1, 0.5)"),
+    (["run", BLOCK, "--set", "materials.soil.E=-5"], "materials.soil.E = -5.0 is outside"),
+    (["run", BLOCK, "--set", "materials.soil.phi=95"], "materials.soil.phi = 95.0 is outside the accepted range [0, 90)"),
+    (["run", BLOCK, "--set", "materials.soil.model=cam_clay_x"], "unknown material model"),
+    (["run", BLOCK, "--set", "mesh.builder=sphere"], "unknown mesh builder"),
+    (["run", BLOCK, "--set", "materials.soil.Young=5"], "unknown key 'Young'"),
+    (["run", BLOCK, "--set", "nosuch.table.key=1"], "the scene has no table 'nosuch'"),
+    (["run", BLOCK, "--set", "loading.steps=0"], "loading.steps = 0 is outside"),
+    (["run", BLOCK, "--set", "loading.direction=up"], "loading.direction: 'up' is not one of"),
+    (["run", BLOCK, "--set", "regions.soil=granite"], "no such material"),
+])
+def test_bad_input_is_one_clear_line(capsys, args, expected):
+    status, out, err = run_main(capsys, *args)
+    assert status == 2
+    assert expected in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) <= 2
+    if "scene.toml" not in args[1]:
+        assert args[1] in err   # the message names the file
+
+
+def test_toml_syntax_and_unknown_key_name_file_and_line(capsys, tmp_path):
+    broken = tmp_path / "broken.toml"
+    broken.write_text((SCENES / "block-drucker-prager.toml").read_text() + "\n[loading\n")
+    status, _, err = run_main(capsys, "run", str(broken))
+    assert status == 2 and "TOML syntax error" in err and str(broken) in err and "line" in err
+
+    unknown = tmp_path / "unknown.toml"
+    unknown.write_text((SCENES / "block-drucker-prager.toml").read_text()
+                       .replace("[loading]", "[loading]\nspeed = 3"))
+    status, _, err = run_main(capsys, "run", str(unknown))
+    assert status == 2 and "loading: unknown key 'speed'" in err
+
+
+def test_list_shows_every_scene_with_its_title(capsys):
+    status, out, _ = run_main(capsys, "list")
+    assert status == 0
+    names = [line.split()[0] for line in out.splitlines()]
+    assert names == sorted(p.stem for p in SCENES.glob("*.toml"))
+    assert all(len(line.split()) > 3 for line in out.splitlines())
+
+
+def test_help_answers():
+    for args in (["--help"], ["run", "--help"], ["list", "--help"]):
+        with pytest.raises(SystemExit) as exit_info:
+            main(args)
+        assert exit_info.value.code == 0
+
+
+def test_installed_command_json_summary_and_run_folder(tmp_path):
+    """The real entry point: --json makes the last stdout line the summary; files on disk."""
+    done = soilbin_cli("run", "column-elastic", "--json", "--out", tmp_path / "col",
+                       "--set", "materials.soil.E=4500")
+    assert done.returncode == 0, done.stderr
+    summary = last_json(done.stdout)
+    for key in ("scene", "n_dofs", "n_steps", "newton_iterations", "wall_s", "converged",
+                "top_settlement", "pressure"):
+        assert key in summary
+    assert summary["top_settlement"] == pytest.approx(100 * 10 / 5000.0, rel=1e-8)
+    assert json.loads((tmp_path / "col" / "summary.json").read_text()) == summary
+    resolved = (tmp_path / "col" / "scene.toml").read_text()
+    assert "E = 4500.0" in resolved
+    # the resolved scene runs again as it is
+    again = soilbin_cli("run", tmp_path / "col" / "scene.toml", "--json", "--out", tmp_path / "again")
+    assert last_json(again.stdout)["top_settlement"] == summary["top_settlement"]
+    assert (tmp_path / "col" / "fields.xdmf").exists() and (tmp_path / "col" / "fields.h5").exists()
+
+
+def test_installed_command_bad_input_has_no_traceback():
+    done = soilbin_cli("run", "block-drucker-prager", "--set", "materials.soil.phi=95")
+    assert done.returncode == 2
+    assert "Traceback" not in done.stderr and "phi" in done.stderr
+
+
+def test_a_run_that_cannot_finish_keeps_its_steps(tmp_path):
+    """Force control past collapse without until_collapse: exit 1, converged steps on disk."""
+    done = soilbin_cli("run", "strip-load-von-mises", "--json", "--out", tmp_path / "fail",
+                       "--set", "loading.until_collapse=false", "--set", "loading.max_cuts=2")
+    assert done.returncode == 1
+    summary = last_json(done.stdout)
+    assert summary["status"] == "failed" and not summary["converged"]
+    assert "smallest increment" in done.stderr
+    rows = (tmp_path / "fail" / "curve.csv").read_text().strip().splitlines()
+    assert len(rows) == 1 + summary["n_steps"] and summary["n_steps"] >= 8

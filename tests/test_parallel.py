@@ -1,0 +1,36 @@
+"""Runs under `mpirun -n 2` give the same load-displacement curve as serial runs."""
+import csv
+import shutil
+
+import pytest
+
+from conftest import last_json, soilbin_cli
+
+pytestmark = pytest.mark.skipif(shutil.which("mpirun") is None, reason="needs mpirun")
+
+
+def curve(path):
+    with open(path) as f:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+@pytest.mark.parametrize("scene, overrides", [
+    ("strip-footing-von-mises", ["--set", "loading.steps=5", "--set", "loading.magnitude=0.03"]),
+    ("column-elastic", []),
+])
+def test_two_ranks_match_serial(tmp_path, scene, overrides):
+    runs = {}
+    for ranks in (1, 2):
+        out = tmp_path / f"n{ranks}"
+        done = soilbin_cli("run", scene, "--json", "--out", out, *overrides,
+                           mpi_ranks=ranks if ranks > 1 else None)
+        assert done.returncode == 0, done.stderr
+        summary = last_json(done.stdout)
+        assert summary["n_ranks"] == ranks
+        runs[ranks] = (summary, curve(out / "curve.csv"))
+    (s1, c1), (s2, c2) = runs[1], runs[2]
+    assert s1["n_dofs"] == s2["n_dofs"] and len(c1) == len(c2)
+    for r1, r2 in zip(c1, c2):
+        assert r2["load_factor"] == pytest.approx(r1["load_factor"], rel=1e-12)
+        assert r2["displacement"] == pytest.approx(r1["displacement"], rel=1e-6)
+        assert r2["force"] == pytest.approx(r1["force"], rel=1e-6)

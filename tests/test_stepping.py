@@ -1,0 +1,61 @@
+"""Load stepping with step cutting, on a scripted stand-in for the FE problem."""
+import pytest
+
+from soilbin.errors import ConvergenceError
+from soilbin.solver.newton import NewtonResult
+from soilbin.solver.stepping import run_load_steps
+
+
+class CollapsingProblem:
+    """Newton fails for load factors above ``limit`` (a collapse load)."""
+
+    def __init__(self, limit):
+        self.limit, self.trial, self.committed, self.solves = limit, 0.0, 0.0, 0
+
+    def set_load_factor(self, factor):
+        self.trial = factor
+
+    def solve(self):
+        self.solves += 1
+        if self.trial > self.limit:
+            raise ConvergenceError("diverged")
+        return NewtonResult(3, (1.0, 1e-3, 1e-9))
+
+    def commit(self):
+        self.committed = self.trial
+
+    def roll_back(self):
+        self.trial = self.committed
+
+    def observe(self):
+        return self.committed, 10 * self.committed
+
+
+def test_reaches_full_load_in_nominal_steps():
+    problem, seen = CollapsingProblem(limit=2.0), []
+    result = run_load_steps(problem, steps=4, max_cuts=3, on_step=seen.append)
+    assert result.complete and [r.load_factor for r in result.steps] == [0.25, 0.5, 0.75, 1.0]
+    assert seen == list(result.steps) and problem.solves == 4
+
+
+def test_brackets_a_collapse_load_to_the_smallest_increment():
+    problem = CollapsingProblem(limit=0.63)
+    result = run_load_steps(problem, steps=4, max_cuts=5, on_step=lambda r: None)
+    assert not result.complete and "smallest increment, 1/128" in result.message
+    last = result.steps[-1].load_factor
+    assert last <= 0.63 < last + 1 / 128          # bracketed to the smallest increment
+    assert problem.committed == last               # the failed trial was rolled back
+    assert all(r.force == pytest.approx(10 * r.load_factor) for r in result.steps)
+
+
+def test_increment_grows_back_after_a_cut():
+    class Hiccup(CollapsingProblem):
+        def solve(self):
+            self.solves += 1
+            if self.solves == 2:        # the second solve fails once
+                raise ConvergenceError("hiccup")
+            return NewtonResult(2, (1.0, 1e-12))
+
+    result = run_load_steps(Hiccup(limit=9.0), steps=2, max_cuts=3, on_step=lambda r: None)
+    assert [r.load_factor for r in result.steps] == [0.5, 0.75, 1.0]
+    assert [r.cuts for r in result.steps] == [0, 1, 0]
