@@ -52,22 +52,22 @@ class FieldWriter:
 
     def __init__(self, path, problem, fields):
         mesh = problem.disc.mesh
-        self._problem = problem
-        self._fields = set(fields)
         self._xdmf = io.XDMFFile(mesh.comm, str(path), "w")
         self._xdmf.write_mesh(mesh)
         self._updates, self._functions = [], []
-        if Field.DISPLACEMENT in self._fields:
+        if Field.DISPLACEMENT in fields:
             u = fem.Function(fem.VectorFunctionSpace(mesh, ("Lagrange", 1)), name="displacement")
-            source = problem.w.sub(0) if problem.disc.element.mixed else problem.w
-            self._updates.append(lambda: u.interpolate(source.collapse() if problem.disc.element.mixed
-                                                       else source))
+            w = problem.w
+            if problem.disc.element.mixed:
+                self._updates.append(lambda: u.interpolate(w.sub(0).collapse()))
+            else:
+                self._updates.append(lambda: u.interpolate(w))
             self._functions.append(u)
-        if Field.STRESS in self._fields:
+        if Field.STRESS in fields:
             s = fem.Function(fem.TensorFunctionSpace(mesh, ("DG", 0)), name="stress")
             self._updates.append(CellAverage(problem.disc, ufl_from_mandel(problem.points.stress), s))
             self._functions.append(s)
-        if Field.PLASTIC_STRAIN in self._fields:
+        if Field.PLASTIC_STRAIN in fields:
             q = fem.Function(quadrature_space(mesh, problem.disc.element.quadrature_degree))
             e = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name="plastic_strain")
             average = CellAverage(problem.disc, q, e)

@@ -20,10 +20,8 @@ from .solver.quadrature import MaterialPoints
 
 class SoilProblem:
     def __init__(self, scene, tagged_mesh):
-        self.scene = scene
         mesh = tagged_mesh.mesh
         self.comm = mesh.comm
-        self.tagged = tagged_mesh
         self.disc = disc = Discretisation.create(mesh, scene.analysis.element)
         self.w = fem.Function(disc.space, name="solution")
         self.w_committed = fem.Function(disc.space)
@@ -35,7 +33,10 @@ class SoilProblem:
         self.points = MaterialPoints(disc, self.w, self.w_committed, region_cells, models)
 
         V = disc.displacement_space
-        facets = lambda name: tagged_mesh.facet_tags.find(tagged_mesh.boundaries[name])
+
+        def facets(name):
+            return tagged_mesh.facet_tags.find(tagged_mesh.boundaries[name])
+
         zero = PETSc.ScalarType(0.0)
         bcs = []
         for support in scene.supports:
@@ -43,9 +44,9 @@ class SoilProblem:
                 i = "xyz".index(axis)
                 dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(support.boundary))
                 bcs.append(fem.dirichletbc(zero, dofs, V.sub(i)))
-        if scene.analysis.plane_strain:
-            n_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
-            all_cells = np.arange(n_cells, dtype=np.int32)
+        if scene.analysis.plane_strain:   # the dofs of every cell
+            cells = mesh.topology.index_map(tdim)
+            all_cells = np.arange(cells.size_local + cells.num_ghosts, dtype=np.int32)
             dofs = fem.locate_dofs_topological(V.sub(1), tdim, all_cells)
             bcs.append(fem.dirichletbc(zero, dofs, V.sub(1)))
 
@@ -77,6 +78,7 @@ class SoilProblem:
         # displacement control, the applied load (at equilibrium) under force control.
         self._probe = fem.Function(disc.space)
         self._probe.x.array[loaded_dofs] = loading.direction.vector[loading.direction.axis]
+        self._probe.x.scatter_forward()
         self._force = fem.form(internal_force(disc, self.points.stress, self.w, self._probe))
         self.area = self._sum(fem.form(fem.Constant(mesh, PETSc.ScalarType(1.0)) * ds_load))
         self._displacement = fem.form(ufl.dot(direction, disc.displacement(self.w)) * ds_load)

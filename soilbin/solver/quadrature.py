@@ -31,7 +31,7 @@ def quadrature_space(mesh, degree, shape=None):
 class MaterialPoints:
     """Stress, tangent and history at every quadrature point of the local (owned + ghost) cells."""
 
-    def __init__(self, disc, w, w_committed, region_cells, models, initial_stress=None):
+    def __init__(self, disc, w, w_committed, region_cells, models):
         """``region_cells``: region name -> local cell indices; ``models``: region name -> model."""
         mesh = disc.mesh
         degree = disc.element.quadrature_degree
@@ -58,15 +58,11 @@ class MaterialPoints:
         self.index = {name: (np.asarray(cells, dtype=np.int64)[:, None] * self.points_per_cell
                              + np.arange(self.points_per_cell)).ravel()
                       for name, cells in region_cells.items()}
-        self.committed = {}
-        for name, idx in self.index.items():
-            sigma0 = None if initial_stress is None else initial_stress[idx]
-            self.committed[name] = self.models[name].initial_state(len(idx), sigma0)
+        self.committed = {name: self.models[name].initial_state(len(idx))
+                          for name, idx in self.index.items()}
         self.trial = dict(self.committed)
         self._stress = np.zeros((n_points, 6))
         self._tangent = np.zeros((n_points, 6, 6))
-        for name, state in self.committed.items():
-            self._stress[self.index[name]] = state["stress"]
         self._tangent_frozen = False
         self._converged_tangent = None
         self.update()   # zero increment: the initial stress and the elastic tangent
@@ -92,17 +88,16 @@ class MaterialPoints:
             self.trial = dict(self.committed)
             for name, idx in self.index.items():
                 self._stress[idx] = self.committed[name]["stress"]
-            self.write(self._stress, self.stress)
             if not self._tangent_frozen:
-                self.write(self._converged_tangent, self.tangent)
-            return
-        deps = self.strain_increment()
-        for name, idx in self.index.items():
-            sigma, tangent, state = self.models[name].update(deps[idx], self.committed[name])
-            self._stress[idx] = sigma
-            if not self._tangent_frozen:
-                self._tangent[idx] = tangent
-            self.trial[name] = state
+                self._tangent[:] = self._converged_tangent
+        else:
+            deps = self.strain_increment()
+            for name, idx in self.index.items():
+                sigma, tangent, state = self.models[name].update(deps[idx], self.committed[name])
+                self._stress[idx] = sigma
+                if not self._tangent_frozen:
+                    self._tangent[idx] = tangent
+                self.trial[name] = state
         self.write(self._stress, self.stress)
         if not self._tangent_frozen:
             self.write(self._tangent, self.tangent)
