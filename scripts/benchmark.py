@@ -45,7 +45,7 @@ def cases(quick):
     refines = (1, 2) if quick else (1, 2, 3, 4)
     for r in refines:
         yield f"strip footing, refine={r}", FOOTING, [f"mesh.refine={r}"], footing_error
-    for r in (1, 2):
+    for r in (1,) if quick else (1, 2):  # hex27-bbar at refine=2 takes minutes
         yield (f"strip footing, refine={r}", FOOTING,
                [f"mesh.refine={r}", "analysis.element=hex27-bbar"], footing_error)
     yield "strip footing, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"], footing_error
@@ -82,7 +82,7 @@ def table(rows):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--readme", type=Path, help="write the table into this file")
-    parser.add_argument("--quick", action="store_true", help="refine 1-2 and nz 6, 24 only")
+    parser.add_argument("--quick", action="store_true", help="refine 1-2 (hex27-bbar: 1) and nz 6, 24 only")
     args = parser.parse_args()
 
     rows = []

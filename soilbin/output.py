@@ -30,7 +30,7 @@ class CellAverage:
         test = ufl.TestFunction(target.function_space)
         ones = ufl.as_tensor(np.ones(test.ufl_shape).tolist()) if test.ufl_shape else 1.0
         self._form = fem.form(ufl.inner(expression, test) * dx)
-        self._volume = self._assemble(fem.form(ufl.inner(ones, test) * dx))
+        self._volume = fem.form(ufl.inner(ones, test) * dx)   # the mesh may move: per call
         self._target = target
 
     @staticmethod
@@ -40,11 +40,12 @@ class CellAverage:
         return b
 
     def __call__(self):
-        b = self._assemble(self._form)
-        b.pointwiseDivide(b, self._volume)
+        b, volume = self._assemble(self._form), self._assemble(self._volume)
+        b.pointwiseDivide(b, volume)
         b.copy(self._target.vector)
         self._target.x.scatter_forward()
         b.destroy()
+        volume.destroy()
 
 
 class FieldWriter:
@@ -54,8 +55,14 @@ class FieldWriter:
         mesh = problem.disc.mesh
         self._xdmf = io.XDMFFile(mesh.comm, str(path), "w")
         self._xdmf.write_mesh(mesh)
+        # Large deformation moves the mesh: fields are written on the initial
+        # mesh, with the total displacement to warp it by in ParaView.
+        self._x = mesh.geometry.x
+        self._reference_x = self._x.copy() if problem.large else None
         self._updates, self._functions = [], []
-        if Field.DISPLACEMENT in fields:
+        if Field.DISPLACEMENT in fields and problem.large:   # accumulated on P1 already
+            self._functions.append(problem.total_displacement)
+        elif Field.DISPLACEMENT in fields:
             u = fem.Function(fem.VectorFunctionSpace(mesh, ("Lagrange", 1)), name="displacement")
             w = problem.w
             if problem.disc.element.mixed:
@@ -82,8 +89,13 @@ class FieldWriter:
     def write(self, t):
         for update in self._updates:
             update()
+        if self._reference_x is not None:
+            current = self._x.copy()
+            self._x[:] = self._reference_x
         for f in self._functions:
             self._xdmf.write_function(f, t)
+        if self._reference_x is not None:
+            self._x[:] = current
 
     def close(self):
         self._xdmf.close()

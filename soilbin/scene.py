@@ -95,6 +95,8 @@ class Loading(Params):
 class Analysis(Params):
     element: Element = param(Element.HEX8, doc="hex8, hex8-bbar, hex27 or hex27-bbar (mean dilatation)")
     plane_strain: bool = param(False, doc="hold the y displacement at zero everywhere (x-z plane)")
+    large_deformation: bool = param(False, doc="updated Lagrangian with an objective stress update "
+                                               "(geometric stiffness, moving mesh)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,6 +151,7 @@ class Scene:
         return toml_out.dumps(data)
 
 
+OPTIONAL_TABLES = ("analysis", "solver", "output")   # all defaults: --set may create them
 TOP_LEVEL = ("title", "units", "mesh", "regions", "materials", "supports", "loading",
              "analysis", "solver", "output", "headline")
 
@@ -187,7 +190,9 @@ def apply_overrides(raw, overrides):
         *parents, leaf = key.split(".")
         node = raw
         for depth, part in enumerate(parents):
-            if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            if node is raw and part in OPTIONAL_TABLES:
+                node = raw.setdefault(part, {})
+            elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
                 node = node[int(part)]
             elif isinstance(node, dict) and part in node:
                 node = node[part]

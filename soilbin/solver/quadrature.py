@@ -12,8 +12,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from ..tensors import ufl_mandel
-from ..forms.virtual_work import enhanced_strain
+from ..tensors import from_mandel, to_mandel
 
 
 def quadrature_space(mesh, degree, shape=None):
@@ -31,8 +30,11 @@ def quadrature_space(mesh, degree, shape=None):
 class MaterialPoints:
     """Stress, tangent and history at every quadrature point of the local (owned + ghost) cells."""
 
-    def __init__(self, disc, w, w_committed, region_cells, models):
-        """``region_cells``: region name -> local cell indices; ``models``: region name -> model."""
+    def __init__(self, disc, w, w_committed, strain_increment, region_cells, models, keep_strain=False):
+        """``strain_increment``: UFL Mandel vector of the strain increment the models
+        integrate; ``region_cells``: region name -> local cell indices; ``models``:
+        region name -> model; ``keep_strain``: also hold that increment at the points
+        in the Function ``strain`` (the updated Lagrangian forms need it)."""
         mesh = disc.mesh
         degree = disc.element.quadrature_degree
         points, _ = basix.make_quadrature(basix.CellType.hexahedron, degree)
@@ -45,11 +47,11 @@ class MaterialPoints:
         self.tangent = fem.Function(quadrature_space(mesh, degree, (6, 6)), name="tangent_q")
         # Position of each evaluated point (cell-major, as Expression.eval) in the Functions.
         self._slot = self.stress.function_space.dofmap.list.array
-        # Strain increment from the last committed state, Δε̄ = ε̄(w) - ε̄(w_n).
+        self.strain = (fem.Function(self.stress.function_space, name="strain_q")
+                       if keep_strain else None)
         self._w, self._w_committed = w, w_committed
-        self._deps = fem.Expression(
-            ufl_mandel(enhanced_strain(disc, w)) - ufl_mandel(enhanced_strain(disc, w_committed)),
-            points)
+        self._deps = fem.Expression(strain_increment, points)
+        self._points = points
 
         covered = np.concatenate([np.asarray(c) for c in region_cells.values()])
         if len(np.unique(covered)) != len(self._cells):
@@ -74,8 +76,8 @@ class MaterialPoints:
         function.x.array.reshape(len(values), -1)[self._slot] = block
 
     def strain_increment(self):
-        """Δε̄ at every local point, (n_points, 6), for the current iterate."""
-        return self._deps.eval(self._cells).reshape(-1, 6)
+        """The strain increment at every local point, (n_points, 6), for the current iterate."""
+        return self.evaluate(self._deps)
 
     def update(self):
         """One constitutive update at the current iterate: σ, C_tan and trial history.
@@ -90,8 +92,12 @@ class MaterialPoints:
                 self._stress[idx] = self.committed[name]["stress"]
             if not self._tangent_frozen:
                 self._tangent[:] = self._converged_tangent
+            if self.strain is not None:
+                self.strain.x.array[:] = 0.0
         else:
             deps = self.strain_increment()
+            if self.strain is not None:
+                self.write(deps, self.strain)
             for name, idx in self.index.items():
                 sigma, tangent, state = self.models[name].update(deps[idx], self.committed[name])
                 self._stress[idx] = sigma
@@ -108,9 +114,28 @@ class MaterialPoints:
         return (self._converged_tangent is not None
                 and np.array_equal(self._w.x.array, self._w_committed.x.array))
 
-    def commit(self):
-        """The trial history of the converged iterate becomes the committed history."""
+    def expression(self, ufl_expression):
+        """Compile a UFL expression at the quadrature points (for :meth:`evaluate`)."""
+        return fem.Expression(ufl_expression, self._points)
+
+    def evaluate(self, expression):
+        """A compiled expression at every local point, (n_points, value size)."""
+        return expression.eval(self._cells).reshape(len(self._cells) * self.points_per_cell, -1)
+
+    def commit(self, rotation=None):
+        """The trial history of the converged iterate becomes the committed history.
+
+        ``rotation`` (n_points, 3, 3), if given, turns every symmetric-tensor
+        history (shape (6,), stress included) with it: h -> R h Rᵀ.
+        """
         self.committed = dict(self.trial)
+        if rotation is not None:
+            for name, state in self.committed.items():
+                idx = self.index[name]
+                self.committed[name] = {
+                    key: (to_mandel(rotation[idx] @ from_mandel(value) @ rotation[idx].transpose(0, 2, 1))
+                          if value.shape[1:] == (6,) else value)
+                    for key, value in state.items()}
         if not self._tangent_frozen:
             self._converged_tangent = self._tangent.copy()
 
