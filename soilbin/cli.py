@@ -58,7 +58,7 @@ def _parser():
 
 def _list_scenes():
     from .scene import read_toml
-    for path in sorted(SCENES_DIR.glob("*.toml")):
+    for path in sorted(SCENES_DIR.glob("*.toml"), key=lambda p: p.stem):
         title = read_toml(path).get("title", "")
         print(f"{path.stem:32s} {title}")
     return 0

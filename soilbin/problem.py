@@ -22,7 +22,8 @@ from .forms.discretisation import Discretisation
 from .scene import Control
 from .solver.newton import NewtonSolver
 from .solver.quadrature import MaterialPoints
-from .tensors import ufl_mandel
+from .errors import InputError
+from .tensors import rotation_matrix, ufl_mandel
 
 
 class SoilProblem:
@@ -41,6 +42,8 @@ class SoilProblem:
             strain = (ufl_mandel(virtual_work.enhanced_strain(disc, w))
                       - ufl_mandel(virtual_work.enhanced_strain(disc, self.w_committed)))
         tdim = mesh.topology.dim
+        x = mesh.geometry.x   # the whole scene turned by the frame rotation
+        x[:, :3] = x[:, :3] @ rotation_matrix(scene.analysis.frame_rotation).T
         region_cells = {name: tagged_mesh.cell_tags.find(tagged_mesh.regions[name])
                         for name in scene.regions}
         models = {name: scene.materials[material] for name, material in scene.regions.items()}
@@ -52,36 +55,37 @@ class SoilProblem:
         def facets(name):
             return tagged_mesh.facet_tags.find(tagged_mesh.boundaries[name])
 
-        zero = PETSc.ScalarType(0.0)
-        bcs = []
-        for support in scene.supports:
-            for axis in support.fix:
-                i = "xyz".index(axis)
-                dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(support.boundary))
-                bcs.append(fem.dirichletbc(zero, dofs, V.sub(i)))
+        loading = scene.loading
+        frame = rotation_matrix(scene.analysis.frame_rotation)
+        direction = frame @ loading.direction.vector
+        self._prescribed = []   # (Constant, coefficient of the prescribed displacement)
+        self.bcs = bcs = []
+        for boundary, axes in self._constraints(scene).items():
+            if len(axes) < 3 and not np.allclose(frame, np.eye(3)):
+                raise InputError(f"analysis.frame_rotation: boundary {boundary!r} must be held in "
+                                 f"all of x, y, z in a rotated frame (it holds {len(axes)})")
+            local = np.array([axes.get(a, 0.0) for a in range(3)])
+            components = (range(3) if len(axes) == 3 else axes)
+            for i in components:
+                coefficient = (frame @ local)[i] if len(axes) == 3 else local[i]
+                dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(boundary))
+                value = fem.Constant(mesh, PETSc.ScalarType(0.0))
+                if coefficient != 0.0:
+                    self._prescribed.append((value, coefficient))
+                bcs.append(fem.dirichletbc(value, dofs, V.sub(i)))
         if scene.analysis.plane_strain:   # the dofs of every cell
             cells = mesh.topology.index_map(tdim)
             all_cells = np.arange(cells.size_local + cells.num_ghosts, dtype=np.int32)
             dofs = fem.locate_dofs_topological(V.sub(1), tdim, all_cells)
-            bcs.append(fem.dirichletbc(zero, dofs, V.sub(1)))
+            bcs.append(fem.dirichletbc(PETSc.ScalarType(0.0), dofs, V.sub(1)))
 
-        loading = scene.loading
-        axis, sign = loading.direction.axis, loading.direction.vector[loading.direction.axis]
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged_mesh.facet_tags)
         self._ds_load = ds(tagged_mesh.boundaries[loading.boundary])
-        direction = ufl.as_vector(loading.direction.vector)
-        loaded_dofs = fem.locate_dofs_topological(V.sub(axis), tdim - 1, facets(loading.boundary))
-        self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))   # traction or displacement
-        # Load factor 1 is the traction magnitude along the direction, or the
-        # displacement of the loaded component (signed by the direction).
-        self._full_load = loading.magnitude
+        self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))   # traction, force control
+        self._magnitude = loading.magnitude
         # In large deformation w is the increment, so is a prescribed displacement.
-        self._incremental_load = self.large and loading.control is Control.DISPLACEMENT
+        self._incremental = self.large and loading.control is Control.DISPLACEMENT
         self._factor = self._committed_factor = 0.0
-        if loading.control is Control.DISPLACEMENT:
-            self._full_load *= sign
-            bcs.append(fem.dirichletbc(self._load, loaded_dofs, V.sub(axis)))
-        self.bcs = bcs
 
         if self.large:
             internal = updated_lagrangian.internal_force(disc, points, w, v)
@@ -92,7 +96,8 @@ class SoilProblem:
             da = 1.0
         residual = internal
         if loading.control is Control.FORCE:   # a fixed direction
-            residual = internal - self._load * ufl.dot(direction, disc.displacement(v)) * da * self._ds_load
+            residual = internal - self._load * ufl.dot(ufl.as_vector(direction), disc.displacement(v)) \
+                * da * self._ds_load
         if self.large:
             jacobian = ufl.derivative(residual, w, ufl.TrialFunction(disc.space))
             self._rotation = points.expression(updated_lagrangian.rotation(disc, w))
@@ -106,12 +111,15 @@ class SoilProblem:
         # the loaded dofs along the load direction: the reaction under
         # displacement control, the applied load (at equilibrium) under force control.
         probe = fem.Function(disc.space)
-        probe.x.array[loaded_dofs] = sign
+        for i in np.flatnonzero(direction):
+            probe.x.array[fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(loading.boundary))] \
+                = direction[i]
         probe.x.scatter_forward()
         self._force = fem.form(ufl.replace(internal, {v: probe}))
         one = fem.Constant(mesh, PETSc.ScalarType(1.0))
         self._area = fem.form(one * self._ds_load)
-        self._displacement = fem.form(ufl.dot(direction, self.total_displacement) * self._ds_load)
+        self._displacement = fem.form(ufl.dot(ufl.as_vector(direction), self.total_displacement)
+                                      * self._ds_load)
 
     def _sum(self, form):
         return self.comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM)
@@ -131,10 +139,26 @@ class SoilProblem:
         """The displacement from the initial configuration (UFL)."""
         return self._motion.total if self.large else self.disc.displacement(self.w)
 
+    @staticmethod
+    def _constraints(scene):
+        """Boundary -> {axis: coefficient of the prescribed displacement (0: a support)},
+        axes in the scene's own frame."""
+        constraints = {}
+        for support in scene.supports:
+            for axis in support.fix:
+                constraints.setdefault(support.boundary, {})["xyz".index(axis)] = 0.0
+        loading = scene.loading
+        if loading.control is Control.DISPLACEMENT:
+            axis = loading.direction.axis
+            constraints.setdefault(loading.boundary, {})[axis] = loading.direction.vector[axis]
+        return constraints
+
     def set_load_factor(self, factor):
         self._factor = factor
-        base = self._committed_factor if self._incremental_load else 0.0
-        self._load.value = (factor - base) * self._full_load
+        self._load.value = factor * self._magnitude
+        base = self._committed_factor if self._incremental else 0.0
+        for value, coefficient in self._prescribed:
+            value.value = (factor - base) * self._magnitude * coefficient
 
     def solve(self):
         """Equilibrium at the current load factor, starting from the last committed state."""

@@ -97,6 +97,16 @@ class Analysis(Params):
     plane_strain: bool = param(False, doc="hold the y displacement at zero everywhere (x-z plane)")
     large_deformation: bool = param(False, doc="updated Lagrangian with an objective stress update "
                                                "(geometric stiffness, moving mesh)")
+    frame_rotation: tuple[float, ...] = param(
+        (0.0, 0.0, 0.0), doc="rotation vector [degrees] turning the whole scene (mesh, supports, "
+                             "loads): results along the loading direction must not change")
+
+    def __post_init__(self):
+        super().__post_init__()
+        if len(self.frame_rotation) != 3:
+            raise InputError(f"frame_rotation = {list(self.frame_rotation)!r}: expected 3 numbers")
+        if any(self.frame_rotation) and self.plane_strain:
+            raise InputError("frame_rotation: a rotated frame cannot be plane strain in y")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -67,3 +67,14 @@ def deviator(v):
     d = v.copy()
     d[..., :3] -= trace(v)[..., None] / 3.0
     return d
+
+
+def rotation_matrix(vector_deg):
+    """Rotation by |v| degrees about v (Rodrigues' formula)."""
+    v = np.radians(np.asarray(vector_deg, dtype=float))
+    angle = np.linalg.norm(v)
+    if angle == 0.0:
+        return np.eye(3)
+    k = v / angle
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * K @ K

@@ -36,3 +36,15 @@ def soilbin_cli(*args, mpi_ranks=None, cwd=None):
 
 def last_json(stdout):
     return json.loads(stdout.strip().splitlines()[-1])
+
+
+def make_problem(scene, *overrides):
+    """A SoilProblem for a scene (name in scenes/ or a path) with --set style overrides."""
+    from mpi4py import MPI
+    from soilbin.meshes import BUILDERS
+    from soilbin.problem import SoilProblem
+    from soilbin.scene import load_scene
+
+    path = Path(scene) if str(scene).endswith(".toml") else SCENES / f"{scene}.toml"
+    loaded = load_scene(path, overrides)
+    return SoilProblem(loaded, BUILDERS[loaded.mesh_builder].build(loaded.mesh, MPI.COMM_WORLD))

@@ -8,9 +8,12 @@ Objective stress update (Hughes & Winget 1980, an incrementally objective
 integration of the Jaumann rate of eq. 2.64-2.66): with the midpoint
 velocity gradient L = ∇Δu (I + ∇Δu/2)⁻¹, the strain increment is
 Δε = sym L and the incremental rotation R = (I − W/2)⁻¹ (I + W/2), W = skew L.
-The model integrates in the rotated-back frame of step n,
-σ̂ = model(σ_n, Δε̂ = Rᵀ Δε̄ R), and σ_{n+1} = R σ̂ Rᵀ. For a rigid increment
-Δε = 0 and R is the rotation itself, exactly.
+The model integrates in the frame of step n: σ̂ = model(σ_n, Δε̂) with the
+midpoint strain rotated back by the half-step rotation,
+Δε̂ = R½ᵀ Δε̄ R½, R½ = (I − W/4)⁻¹ (I + W/4), and σ_{n+1} = R σ̂ Rᵀ; for an
+isotropic law this is σ_{n+1} = R σ_n Rᵀ + R½ Δσ R½ᵀ, second-order accurate
+(rotating Δε by the whole R instead makes it first order). For a rigid
+increment Δε = 0 and R is the rotation itself, exactly.
 
 Internal virtual work on Ω_{n+1}, pulled back to Ω_n:
     ∫ σ_{n+1} : ∇_{n+1} v dv = ∫ J σ_{n+1} : (∇v F⁻¹) dV,
@@ -26,21 +29,26 @@ import ufl
 from ..tensors import ufl_from_mandel, ufl_mandel
 
 
+def _cayley(W):
+    I = ufl.Identity(3)
+    return ufl.inv(I - W / 2) * (I + W / 2)
+
+
 def kinematics(disc, w):
-    """(F, Δε, R) of the increment in ``w`` on the current mesh Ω_n."""
+    """(F, Δε, R, R½) of the increment in ``w`` on the current mesh Ω_n."""
     I = ufl.Identity(3)
     grad_du = ufl.grad(disc.displacement(w))
     L = grad_du * ufl.inv(I + grad_du / 2)
     W = ufl.skew(L)
-    return I + grad_du, ufl.sym(L), ufl.inv(I - W / 2) * (I + W / 2)
+    return I + grad_du, ufl.sym(L), _cayley(W), _cayley(W / 2)
 
 
 def model_strain(disc, w):
-    """Δε̂ = Rᵀ Δε̄ R, the strain increment the constitutive model integrates."""
-    _, deps, R = kinematics(disc, w)
+    """Δε̂ = R½ᵀ Δε̄ R½, the strain increment the constitutive model integrates."""
+    _, deps, _, R_half = kinematics(disc, w)
     if disc.element.mixed:
         deps = ufl.dev(deps) + ufl.split(w)[1] / 3.0 * ufl.Identity(3)
-    return R.T * deps * R
+    return R_half.T * deps * R_half
 
 
 def rotation(disc, w):
@@ -49,7 +57,7 @@ def rotation(disc, w):
 
 def internal_force(disc, points, w, v):
     """∫ J σ_{n+1} : ∇v F⁻¹ dV (+ mean-dilatation terms) with σ̂ linearised about the iterate."""
-    F, deps, R = kinematics(disc, w)
+    F, deps, R, _ = kinematics(disc, w)
     J = ufl.det(F)
     deps_hat = ufl_mandel(model_strain(disc, w))
     sigma_hat = points.stress + ufl.dot(points.tangent, deps_hat - points.strain)

@@ -79,6 +79,7 @@ class ConeModel(IsotropicElasticity):
         eta, k = self.cone
         sigma, tangent, yield_state = return_map(self.trial(deps, stress_n),
                                                  self.K, self.G, eta, k)
-        eps_p_eq = state["eps_p_eq"] + self.equivalent_plastic_strain(deps, sigma - stress_n)
+        eps_p_eq = state["eps_p_eq"] + np.where(
+            yield_state > ELASTIC, self.equivalent_plastic_strain(deps, sigma - stress_n), 0.0)
         return sigma, tangent, {"stress": sigma, "eps_p_eq": eps_p_eq,
                                 "yield_state": yield_state}
