@@ -19,7 +19,8 @@ from dolfinx import fem
 
 from .forms import updated_lagrangian, virtual_work
 from .forms.discretisation import Discretisation
-from .scene import Control
+from .interface.rigid_tool import RigidToolContact
+from .scene import TOOL, Control
 from .solver.newton import NewtonSolver
 from .solver.quadrature import MaterialPoints
 from .errors import InputError
@@ -28,6 +29,7 @@ from .tensors import rotation_matrix, ufl_mandel
 
 class SoilProblem:
     def __init__(self, scene, tagged_mesh):
+        self.scene, self.tagged = scene, tagged_mesh
         mesh = tagged_mesh.mesh
         self.comm = mesh.comm
         self.large = scene.analysis.large_deformation
@@ -79,8 +81,17 @@ class SoilProblem:
             dofs = fem.locate_dofs_topological(V.sub(1), tdim, all_cells)
             bcs.append(fem.dirichletbc(PETSc.ScalarType(0.0), dofs, V.sub(1)))
 
+        tool = scene.tool
+        self._drives_tool = loading.boundary == TOOL
+        loaded = tool.faces if self._drives_tool else (loading.boundary,)
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged_mesh.facet_tags)
-        self._ds_load = ds(tagged_mesh.boundaries[loading.boundary])
+        self._ds_load = ds(tuple(tagged_mesh.boundaries[name] for name in loaded))
+        self._direction = direction
+        self.contact = None
+        if tool is not None and not tool.bonded:
+            self.contact = RigidToolContact(disc, w, tagged_mesh.facet_tags,
+                                            [tagged_mesh.boundaries[f] for f in tool.faces],
+                                            tool.interface, bcs, incremental=self.large)
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))   # traction, force control
         self._magnitude = loading.magnitude
         # In large deformation w is the increment, so is a prescribed displacement.
@@ -94,10 +105,16 @@ class SoilProblem:
         else:
             internal = virtual_work.internal_force(disc, points.stress, w, v)
             da = 1.0
+        def traction(magnitude, axis_vector, measure):   # fixed direction, per deformed area
+            t = ufl.as_vector(frame @ np.asarray(axis_vector))
+            return magnitude * ufl.dot(t, disc.displacement(v)) * da * measure
+
         residual = internal
-        if loading.control is Control.FORCE:   # a fixed direction
-            residual = internal - self._load * ufl.dot(ufl.as_vector(direction), disc.displacement(v)) \
-                * da * self._ds_load
+        if loading.control is Control.FORCE:
+            residual -= traction(self._load, loading.direction.vector, self._ds_load)
+        for dead in scene.tractions:
+            residual -= traction(dead.magnitude, dead.direction.vector,
+                                 ds(tagged_mesh.boundaries[dead.boundary]))
         if self.large:
             jacobian = ufl.derivative(residual, w, ufl.TrialFunction(disc.space))
             self._rotation = points.expression(updated_lagrangian.rotation(disc, w))
@@ -105,15 +122,17 @@ class SoilProblem:
         else:
             jacobian = virtual_work.material_stiffness(disc, points.tangent,
                                                        ufl.TrialFunction(disc.space), v)
-        self.newton = NewtonSolver(self.comm, residual, jacobian, w, bcs, points.update, scene.solver)
+        self.newton = NewtonSolver(self.comm, residual, jacobian, w, bcs, self._update, scene.solver,
+                                   nodal_terms=[self.contact] if self.contact else [])
 
         # Observables on the loaded boundary. The force is the internal force on
         # the loaded dofs along the load direction: the reaction under
         # displacement control, the applied load (at equilibrium) under force control.
         probe = fem.Function(disc.space)
         for i in np.flatnonzero(direction):
-            probe.x.array[fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(loading.boundary))] \
-                = direction[i]
+            for name in loaded:
+                probe.x.array[fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(name))] \
+                    = direction[i]
         probe.x.scatter_forward()
         self._force = fem.form(ufl.replace(internal, {v: probe}))
         one = fem.Constant(mesh, PETSc.ScalarType(1.0))
@@ -142,16 +161,27 @@ class SoilProblem:
     @staticmethod
     def _constraints(scene):
         """Boundary -> {axis: coefficient of the prescribed displacement (0: a support)},
-        axes in the scene's own frame."""
+        axes in the scene's own frame. A bonded tool's faces move with it."""
         constraints = {}
         for support in scene.supports:
             for axis in support.fix:
                 constraints.setdefault(support.boundary, {})["xyz".index(axis)] = 0.0
         loading = scene.loading
-        if loading.control is Control.DISPLACEMENT:
+        if loading.control is Control.FORCE:
+            return constraints
+        if loading.boundary != TOOL:
             axis = loading.direction.axis
             constraints.setdefault(loading.boundary, {})[axis] = loading.direction.vector[axis]
+        elif scene.tool.bonded:
+            for face in scene.tool.faces:
+                constraints[face] = dict(enumerate(loading.direction.vector))
         return constraints
+
+    def _update(self):
+        """The constitutive and interface updates of one Newton iterate."""
+        self.points.update()
+        if self.contact is not None:
+            self.contact.update()
 
     def set_load_factor(self, factor):
         self._factor = factor
@@ -159,6 +189,8 @@ class SoilProblem:
         base = self._committed_factor if self._incremental else 0.0
         for value, coefficient in self._prescribed:
             value.value = (factor - base) * self._magnitude * coefficient
+        if self.contact is not None and self._drives_tool:
+            self.contact.tool_displacement = factor * self._magnitude * self._direction
 
     def solve(self):
         """Equilibrium at the current load factor, starting from the last committed state."""
@@ -166,6 +198,8 @@ class SoilProblem:
 
     def commit(self):
         self._committed_factor = self._factor
+        if self.contact is not None:
+            self.contact.commit()
         if self.large:   # rotate the history, move the mesh, start the next increment
             self.points.commit(self.points.evaluate(self._rotation).reshape(-1, 3, 3))
             self._motion.advance()
@@ -179,7 +213,11 @@ class SoilProblem:
         self.w.x.array[:] = self.w_committed.x.array
 
     def observe(self):
-        """(mean displacement, force) of the loaded boundary along the load direction."""
+        """(mean displacement, force) of the loaded boundary along the load direction; for a
+        tool behind an interface, its displacement and the force that drives it."""
+        if self.contact is not None and self._drives_tool:
+            return (self._factor * self._magnitude,
+                    -float(self.contact.force() @ self._direction))
         return self._sum(self._displacement) / self.area, self._sum(self._force)
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .errors import InputError
 from .forms.discretisation import Element
+from .interface.mohr_coulomb import MohrCoulombInterface
 from .meshes import BUILDERS
 from .models import MODELS
 from .params import Params, from_table, param
@@ -79,6 +80,14 @@ class Support(Params):
 
 
 @dataclasses.dataclass(frozen=True)
+class Traction(Params):
+    """A dead load (e.g. a surcharge) applied in full from the first step on."""
+    boundary: str = param(doc="facet group of the mesh")
+    direction: Direction = param(doc="signed axis of the traction, e.g. '-z'")
+    magnitude: float = param(lo=0.0, doc="traction (force/area)")
+
+
+@dataclasses.dataclass(frozen=True)
 class Loading(Params):
     control: Control = param(doc="force: a traction on the boundary; displacement: a prescribed displacement")
     boundary: str = param(doc="facet group that is loaded or displaced")
@@ -89,6 +98,24 @@ class Loading(Params):
     max_cuts: int = param(8, lo=0, hi=30, doc="times a failing step may be halved in a row")
     until_collapse: bool = param(False, doc="force control: a step that cannot be converged "
                                             "marks the collapse load and ends the run normally")
+
+
+TOOL = "tool"   # the loading boundary name that means the rigid tool
+
+
+@dataclasses.dataclass(frozen=True)
+class Tool(Params):
+    """A rigid tool in a cavity of the soil mesh, displaced as a whole (loading.boundary = 'tool')."""
+    faces: tuple[str, ...] = param(doc="soil boundaries against the tool (the cavity faces)")
+    bonded: bool = param(False, doc="true: the faces move with the tool (no interface)")
+    interface: MohrCoulombInterface = param(None, doc="Mohr-Coulomb interface law (unless bonded)")
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not self.faces:
+            raise InputError("faces: name at least one boundary")
+        if not self.bonded and self.interface is None:
+            raise InputError("interface: a [tool.interface] table is required unless bonded = true")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -113,7 +140,7 @@ class Analysis(Params):
 class Solver(Params):
     rtol: float = param(1e-9, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
                         doc="residual reduction that ends Newton in a step")
-    atol: float = param(1e-12, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
+    atol: float = param(1e-10, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
                         doc="residual floor relative to the run's force scale")
     max_iterations: int = param(25, lo=1, hi=200, doc="Newton iterations before the step is cut")
     line_search: LineSearch = param(LineSearch.BASIC, doc="basic (full steps) or bt (backtracking)")
@@ -141,6 +168,8 @@ class Scene:
     solver: Solver
     output: Output
     headline: dict           # result key -> Headline
+    tool: Tool = None
+    tractions: tuple = ()
 
     @property
     def name(self):
@@ -155,15 +184,20 @@ class Scene:
                 "regions": dict(self.regions),
                 "materials": {n: {"model": _model_name(m), **table(m)} for n, m in self.materials.items()},
                 "supports": [table(s) for s in self.supports],
+                "tractions": [table(t) for t in self.tractions],
                 "loading": table(self.loading), "analysis": table(self.analysis),
                 "solver": table(self.solver), "output": table(self.output),
                 "headline": {k: v.value for k, v in self.headline.items()}}
+        if self.tool is not None:
+            data["tool"] = {"faces": self.tool.faces, "bonded": self.tool.bonded}
+            if self.tool.interface is not None:
+                data["tool"]["interface"] = table(self.tool.interface)
         return toml_out.dumps(data)
 
 
 OPTIONAL_TABLES = ("analysis", "solver", "output")   # all defaults: --set may create them
 TOP_LEVEL = ("title", "units", "mesh", "regions", "materials", "supports", "loading",
-             "analysis", "solver", "output", "headline")
+             "analysis", "solver", "output", "headline", "tool", "tractions")
 
 
 def _model_name(model):
@@ -263,9 +297,23 @@ def _parse(raw, path):
     if not isinstance(supports, list):
         raise InputError("supports: expected an array of tables [[supports]]")
     supports = tuple(from_table(Support, s, f"supports[{i}]") for i, s in enumerate(supports))
+    tractions = raw.get("tractions", [])
+    if not isinstance(tractions, list):
+        raise InputError("tractions: expected an array of tables [[tractions]]")
+    tractions = tuple(from_table(Traction, t, f"tractions[{i}]") for i, t in enumerate(tractions))
     loading = from_table(Loading, _require(raw, "loading", dict), "loading")
-    for where, name in [(f"supports[{i}].boundary", s.boundary) for i, s in enumerate(supports)] + \
-            [("loading.boundary", loading.boundary)]:
+    tool = from_table(Tool, raw["tool"], "tool") if "tool" in raw else None
+    named = [(f"supports[{i}].boundary", s.boundary) for i, s in enumerate(supports)]
+    named += [(f"tractions[{i}].boundary", t.boundary) for i, t in enumerate(tractions)]
+    named += [(f"tool.faces[{i}]", face) for i, face in enumerate(tool.faces if tool else ())]
+    if loading.boundary == TOOL:
+        if tool is None:
+            raise InputError("loading.boundary = 'tool' needs a [tool] table")
+        if loading.control is not Control.DISPLACEMENT:
+            raise InputError("loading.control: the rigid tool is driven by displacement control")
+    else:
+        named.append(("loading.boundary", loading.boundary))
+    for where, name in named:
         if name not in builder.boundaries:
             raise InputError(f"{where} = {name!r}: mesh builder {builder_name!r} has no such "
                              f"boundary; its boundaries: {', '.join(builder.boundaries)}")
@@ -288,7 +336,7 @@ def _parse(raw, path):
                  analysis=from_table(Analysis, raw.get("analysis", {}), "analysis"),
                  solver=from_table(Solver, raw.get("solver", {}), "solver"),
                  output=from_table(Output, raw.get("output", {}), "output"),
-                 headline=headline)
+                 headline=headline, tool=tool, tractions=tractions)
 
 
 def load_scene(path, overrides=()):

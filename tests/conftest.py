@@ -48,3 +48,18 @@ def make_problem(scene, *overrides):
     path = Path(scene) if str(scene).endswith(".toml") else SCENES / f"{scene}.toml"
     loaded = load_scene(path, overrides)
     return SoilProblem(loaded, BUILDERS[loaded.mesh_builder].build(loaded.mesh, MPI.COMM_WORLD))
+
+
+@pytest.fixture
+def solve_file():
+    """solve_file(path, *overrides) -> (summary, curve rows, problem), serial, in this process."""
+    from soilbin.solver.stepping import run_load_steps
+
+    def _solve(path, *overrides):
+        problem = make_problem(path, *overrides)
+        steps = problem.scene.loading
+        result = run_load_steps(problem, steps.steps, steps.max_cuts, lambda r: None)
+        rows = [{"force": r.force, "displacement": r.displacement, "load_factor": r.load_factor}
+                for r in result.steps]
+        return result, rows, problem
+    return _solve

@@ -3,10 +3,12 @@
 Call these inside a ``geometry`` function of :func:`.tagged.build_tagged_mesh`.
 """
 import itertools
+import math
 from dataclasses import dataclass
-from typing import Sequence, Union
+from typing import Callable, Sequence, Union
 
 import gmsh
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -18,6 +20,73 @@ class Segment:
     n: int
     ratio: float = 1.0
 
+    @classmethod
+    def growing(cls, start: float, end: float, size: float, growth: float = 1.0) -> "Segment":
+        """From ``start`` to ``end`` (either way round) in the fewest elements that are at most
+        ``size`` long at ``start`` and grow by ``growth`` (>= 1) from one to the next."""
+        length = abs(end - start)
+        if growth == 1.0:
+            count = length / size
+        else:
+            count = math.log1p(length * (growth - 1.0) / size) / math.log(growth)
+        n = max(1, math.ceil(count - 1e-9))
+        return cls(min(start, end), max(start, end), n, growth if end > start else 1.0 / growth)
+
+    def refined(self, k: int) -> "Segment":
+        """Every element split into k, keeping the nodes: k n elements, ratio ** (1 / k)."""
+        return Segment(self.lo, self.hi, self.n * k, self.ratio ** (1.0 / k))
+
+
+Mapping = Callable[[float, float, float], tuple[float, float, float]]
+
+
+def block_grid(xs: Sequence[Segment], ys: Sequence[Segment], zs: Sequence[Segment],
+               keep: Callable[[int, int, int], bool] = lambda i, j, k: True,
+               mapping: Mapping = lambda x, y, z: (x, y, z)) -> None:
+    """Transfinite hexahedral blocks: the products of the x, y and z segments (each sequence
+    contiguous and ascending) whose indices (i, j, k) ``keep`` accepts.
+
+    ``mapping`` moves the block corners; the blocks' faces must stay planar
+    (e.g. a map bilinear in each block). Synchronizes the model.
+    """
+    geo = gmsh.model.geo
+    segments = (xs, ys, zs)
+    ticks = [[s[0].lo] + [t.hi for t in s] for s in segments]
+    blocks = [b for b in itertools.product(*(range(len(s)) for s in segments)) if keep(*b)]
+    points, lines, faces = {}, {}, {}
+
+    def shift(corner, axis):
+        return tuple(c + (a == axis) for a, c in enumerate(corner))
+
+    def point(corner):
+        if corner not in points:
+            points[corner] = geo.addPoint(*mapping(*(t[c] for t, c in zip(ticks, corner))))
+        return points[corner]
+
+    def line(corner, axis):
+        if (corner, axis) not in lines:
+            tag = geo.addLine(point(corner), point(shift(corner, axis)))
+            s = segments[axis][corner[axis]]
+            geo.mesh.setTransfiniteCurve(tag, s.n + 1, "Progression", s.ratio)
+            lines[corner, axis] = tag
+        return lines[corner, axis]
+
+    def face(corner, normal):
+        if (corner, normal) not in faces:
+            a, b = (axis for axis in range(3) if axis != normal)
+            loop = [line(corner, a), line(shift(corner, a), b), -line(shift(corner, b), a), -line(corner, b)]
+            tag = geo.addPlaneSurface([geo.addCurveLoop(loop)])
+            geo.mesh.setTransfiniteSurface(tag)
+            geo.mesh.setRecombine(2, tag)
+            faces[corner, normal] = tag
+        return faces[corner, normal]
+
+    for block in blocks:
+        sides = [face(c, axis) for axis in range(3) for c in (block, shift(block, axis))]
+        volume = geo.addVolume([geo.addSurfaceLoop(sides)])
+        geo.mesh.setTransfiniteVolume(volume)
+    geo.synchronize()
+
 
 def extruded_grid(xs: Sequence[Segment], zs: Sequence[Segment], thickness: float, layers: int) -> None:
     """Blocks of transfinite quads on the x-z plane, extruded to y = thickness in hexahedra.
@@ -26,30 +95,16 @@ def extruded_grid(xs: Sequence[Segment], zs: Sequence[Segment], thickness: float
     ``zs`` (each sequence contiguous and ascending); ``layers`` elements span
     the thickness. Synchronizes the model.
     """
-    geo = gmsh.model.geo
-    x = [xs[0].lo] + [s.hi for s in xs]
-    z = [zs[0].lo] + [s.hi for s in zs]
-    point = {(i, j): geo.addPoint(x[i], 0.0, z[j]) for i in range(len(x)) for j in range(len(z))}
-
-    def line(start, end, segment):
-        tag = geo.addLine(point[start], point[end])
-        geo.mesh.setTransfiniteCurve(tag, segment.n + 1, "Progression", segment.ratio)
-        return tag
-
-    along_x = {(i, j): line((i, j), (i + 1, j), s) for i, s in enumerate(xs) for j in range(len(z))}
-    along_z = {(i, j): line((i, j), (i, j + 1), s) for i in range(len(x)) for j, s in enumerate(zs)}
-    faces = []
-    for i, j in itertools.product(range(len(xs)), range(len(zs))):
-        loop = geo.addCurveLoop([along_x[i, j], along_z[i + 1, j], -along_x[i, j + 1], -along_z[i, j]])
-        face = geo.addPlaneSurface([loop])
-        geo.mesh.setTransfiniteSurface(face)
-        geo.mesh.setRecombine(2, face)
-        faces.append((2, face))
-    geo.extrude(faces, 0.0, thickness, 0.0, numElements=[layers], recombine=True)
-    geo.synchronize()
+    block_grid(xs, [Segment(0.0, thickness, layers)], zs)
 
 
 Limit = Union[None, float, tuple[float, float]]
+
+
+def _tolerance() -> float:
+    """1e-6 of the model's largest extent."""
+    box = gmsh.model.getBoundingBox(-1, -1)
+    return 1e-6 * max(b - a for a, b in zip(box[:3], box[3:]))
 
 
 def entities_within(dim: int, x: Limit = None, y: Limit = None, z: Limit = None) -> list[int]:
@@ -63,6 +118,18 @@ def entities_within(dim: int, x: Limit = None, y: Limit = None, z: Limit = None)
     for k, limit in enumerate((x, y, z)):
         if limit is not None:
             lo[k], hi[k] = limit if isinstance(limit, tuple) else (limit, limit)
-    tol = 1e-6 * max(b - a for a, b in zip(box[:3], box[3:]))
+    tol = _tolerance()
     found = gmsh.model.getEntitiesInBoundingBox(*(v - tol for v in lo), *(v + tol for v in hi), dim=dim)
     return [tag for _, tag in found]
+
+
+def on_plane(dim: int, tags: Sequence[int], point, normal) -> list[int]:
+    """Those of the ``dim``-entities ``tags`` whose corner points all lie on the plane through
+    ``point`` with unit ``normal`` (same tolerance as :func:`entities_within`)."""
+    tol = _tolerance()
+
+    def distance(corner):
+        return abs(np.dot(np.asarray(gmsh.model.getValue(0, corner, [])) - point, normal))
+
+    return [tag for tag in tags
+            if all(distance(c) <= tol for _, c in gmsh.model.getBoundary([(dim, tag)], recursive=True))]

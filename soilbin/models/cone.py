@@ -5,29 +5,67 @@
 which is Drucker–Prager (dissertation eq. B.2, eta = 3 alpha) and, for
 eta = 0, von Mises (eq. B.1). Closed-form return mapping and consistent
 tangent after de Souza Neto et al. (2008), sections 7.3-7.4 and 8.3.
+
+Optionally with a tension cut-off on the mean stress (soil that cannot carry
+tension, dissertation sec. VI.4; as the tension cut-off of the cap models of
+DiMaggio & Sandler 1971):
+
+    f_t = p - T <= 0,   T >= 0,
+
+associated as well. It is active when T < k / eta (below the apex; always
+for eta = 0), and then the return has three plastic regions in the trial
+(sqrt(J2), p) plane, separated by the flow directions at the corner
+(p = T, sqrt(J2) = J_c = k - eta T): the cone, (G, K eta), and the cut-off, (0, K):
+
+    cone     J_tr > J_c,  G (p_tr - T) <  eta K (J_tr - J_c)   (and f_tr > 0),
+    corner   J_tr > J_c,  G (p_tr - T) >= eta K (J_tr - J_c),
+    cut-off  J_tr <= J_c, p_tr > T.
+
+The corner replaces the apex; with T >= k / eta the cut-off is inactive and
+the return is exactly that of the plain cone.
 """
 import abc
 import dataclasses
+import math
 
 import numpy as np
 
+from ..params import param
 from ..tensors import IDENTITY, P_DEV, SQRT2, deviator, trace
 from .elastic import IsotropicElasticity, elastic_stiffness
 
-#: yield_state values.
-ELASTIC, SURFACE, APEX = 0.0, 1.0, 2.0
+#: yield_state values: elastic, on the cone, at the apex or (with an active
+#: tension cut-off) at the corner of cone and cut-off, on the cut-off p = T.
+ELASTIC, SURFACE, APEX, CUTOFF = 0.0, 1.0, 2.0, 3.0
+CORNER = APEX
 #: Trial states with f_tr below this fraction of the stress scale are elastic.
 YIELD_TOL = 1e-12
 
 
-def return_map(sigma_tr, K, G, eta, k):
-    """(sigma, C_tan, yield_state) from trial stresses (n, 6) for the cone (eta, k)."""
+def tension_cutoff_param():
+    """The ``tension_cutoff`` field shared by the cone models."""
+    return param(math.inf, lo=0.0, hi=math.inf,
+                 doc="largest mean stress p = I1/3 the soil carries (tension positive); "
+                     "inf (the default) or at least the cone's apex: no cut-off")
+
+
+def cutoff_active(eta, k, tension_cutoff):
+    """True when the cut-off p <= T cuts the cone (T below the apex k / eta)."""
+    return math.isfinite(tension_cutoff) and eta * tension_cutoff < k
+
+
+def return_map(sigma_tr, K, G, eta, k, tension_cutoff=math.inf):
+    """(sigma, C_tan, yield_state) from trial stresses (n, 6) for the cone
+    (eta, k), optionally cut off at the mean stress p = ``tension_cutoff``."""
     p_tr = trace(sigma_tr) / 3.0
     s_tr = deviator(sigma_tr)
     s_norm = np.linalg.norm(s_tr, axis=-1)
     J_tr = s_norm / SQRT2
     f_tr = J_tr + eta * p_tr - k
     plastic = f_tr > YIELD_TOL * (k + J_tr + eta * np.abs(p_tr))
+    if cutoff_active(eta, k, tension_cutoff):
+        return _cutoff_return_map(sigma_tr, p_tr, s_tr, s_norm, J_tr, f_tr, plastic,
+                                  K, G, eta, k, tension_cutoff)
     dgamma = np.where(plastic, f_tr, 0.0) / (G + K * eta**2)
     # The cone return is valid while sqrt(J2) = J_tr - G dgamma stays >= 0.
     apex = plastic & (J_tr < G * dgamma) & (eta > 0.0)
@@ -48,6 +86,34 @@ def return_map(sigma_tr, K, G, eta, k):
     return sigma, tangent, yield_state
 
 
+def _cutoff_return_map(sigma_tr, p_tr, s_tr, s_norm, J_tr, f_tr, plastic, K, G, eta, k, T):
+    """:func:`return_map` with an active cut-off p <= T (regions: module doc)."""
+    plastic = plastic | (p_tr - T > YIELD_TOL * (k + J_tr + np.abs(p_tr)))
+    J_c = k - eta * T   # sqrt(J2) at the corner, > 0
+    corner = plastic & (J_tr > J_c) & (G * (p_tr - T) >= eta * K * (J_tr - J_c))
+    cut = plastic & ~corner & (J_tr <= J_c)
+    cone = plastic & ~corner & ~cut   # here f_tr > 0 and the cone return has p < T
+    dgamma = np.where(cone, f_tr, 0.0) / (G + K * eta**2)
+
+    sigma = sigma_tr.copy()
+    sigma[cone] = (s_tr[cone] * (1.0 - G * dgamma[cone] / J_tr[cone])[:, None]
+                   + np.outer(p_tr[cone] - K * eta * dgamma[cone], IDENTITY))
+    sigma[corner] = s_tr[corner] * (J_c / J_tr[corner])[:, None] + T * IDENTITY
+    sigma[cut] = s_tr[cut] + T * IDENTITY
+
+    tangent = np.repeat(elastic_stiffness(K, G)[None], len(sigma), axis=0)
+    tangent[cone] = consistent_tangent(s_tr[cone] / s_norm[cone, None],
+                                       G * dgamma[cone] / J_tr[cone], K, G, eta)
+    # Corner: p = T and sqrt(J2) = J_c are fixed, only the direction n of s turns.
+    n = s_tr[corner] / s_norm[corner, None]
+    tangent[corner] = (2.0 * G * (J_c / J_tr[corner])[:, None, None]
+                       * (P_DEV - n[:, :, None] * n[:, None, :]))
+    tangent[cut] = 2.0 * G * P_DEV   # p = T is fixed, s = s_tr
+
+    yield_state = np.select([cone, corner, cut], [SURFACE, CORNER, CUTOFF], ELASTIC)
+    return sigma, tangent, yield_state
+
+
 def consistent_tangent(n, ratio, K, G, eta):
     """Algorithmic tangent on the cone (de Souza Neto et al. 2008, sec. 8.3):
 
@@ -65,9 +131,16 @@ def consistent_tangent(n, ratio, K, G, eta):
 
 @dataclasses.dataclass(frozen=True)
 class ConeModel(IsotropicElasticity):
-    """Base of the cone models; a subclass gives its ``cone`` (eta, k)."""
+    """Base of the cone models; a subclass gives its ``cone`` (eta, k) and may
+    declare the field ``tension_cutoff: float = tension_cutoff_param()`` after
+    its fields without a default (else it has no cut-off).
+
+    History ``yield_state``: 0 elastic, 1 on the cone, 2 at the apex or at the
+    corner of cone and tension cut-off, 3 on the tension cut-off p = T.
+    """
 
     history = {"stress": (6,), "eps_p_eq": (), "yield_state": ()}
+    tension_cutoff = math.inf   # no cut-off unless a subclass declares the field
 
     @property
     @abc.abstractmethod
@@ -78,7 +151,7 @@ class ConeModel(IsotropicElasticity):
         stress_n = state["stress"]
         eta, k = self.cone
         sigma, tangent, yield_state = return_map(self.trial(deps, stress_n),
-                                                 self.K, self.G, eta, k)
+                                                 self.K, self.G, eta, k, self.tension_cutoff)
         eps_p_eq = state["eps_p_eq"] + np.where(
             yield_state > ELASTIC, self.equivalent_plastic_strain(deps, sigma - stress_n), 0.0)
         return sigma, tangent, {"stress": sigma, "eps_p_eq": eps_p_eq,

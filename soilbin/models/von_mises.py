@@ -4,15 +4,16 @@ import dataclasses
 import math
 
 from ..params import param
-from .cone import ConeModel
+from .cone import ConeModel, tension_cutoff_param
 
 
 @dataclasses.dataclass(frozen=True)
 class VonMises(ConeModel):
-    """f = sqrt(J2) - c."""
+    """f = sqrt(J2) - c, optionally with the tension cut-off p <= tension_cutoff (see .cone)."""
 
     c: float = param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True,
                      doc="undrained shear strength")
+    tension_cutoff: float = tension_cutoff_param()
 
     @property
     def cone(self):

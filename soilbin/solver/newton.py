@@ -33,10 +33,13 @@ _REASONS = {-3: "linear solve failed", -4: "residual is not a number",
 
 
 class NewtonSolver:
-    def __init__(self, comm, residual, jacobian, w, bcs, before_residual, options, prefix="soil_"):
-        """``before_residual()`` runs after ``w`` is set to an iterate, before assembly."""
+    def __init__(self, comm, residual, jacobian, w, bcs, before_residual, options, prefix="soil_",
+                 nodal_terms=()):
+        """``before_residual()`` runs after ``w`` is set to an iterate, before assembly;
+        ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``)."""
         self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
+        self._nodal_terms = tuple(nodal_terms)
         self._opts = options
         self._b = fem.petsc.create_vector(self._L)
         self._A = fem.petsc.create_matrix(self._a)
@@ -76,6 +79,8 @@ class NewtonSolver:
         if self._bc_mismatch(x):   # first iterate of a displacement step: lift g - x
             fem.petsc.apply_lifting(b, [self._a], bcs=[self._bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        for term in self._nodal_terms:
+            term.add_residual(b)
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
 
     def _bc_mismatch(self, x):
@@ -88,6 +93,10 @@ class NewtonSolver:
     def _J(self, snes, x, A, P):
         A.zeroEntries()
         fem.petsc.assemble_matrix(A, self._a, bcs=self._bcs)
+        if self._nodal_terms:   # the BC diagonal was inserted: flush before adding
+            A.assemble(PETSc.Mat.AssemblyType.FLUSH)
+        for term in self._nodal_terms:
+            term.add_jacobian(A)
         A.assemble()
 
     def _converged(self, snes, it, norms):

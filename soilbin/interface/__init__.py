@@ -1,0 +1,1 @@
+"""Tool–soil interfaces: the interface law and its nodal penalty assembly."""

@@ -1,0 +1,106 @@
+"""A rigid tool acting on the soil through an interface law, assembled at the nodes.
+
+The soil mesh has a cavity where the tool is; its faces are the contact
+surface. The tool moves rigidly by U (a translation), so the jump of a soil
+node on a tool face is u − U and the face's normal is fixed. Each (node,
+face) pair is a contact point with its tributary area A = ∫ φ_node ds over
+the face and the face normal averaged at the node: the penalty terms are
+integrated with the nodal (lumped) rule, so the law and its slip history
+live exactly at the contact points and a node on an edge of the tool
+touches both faces. Residual += A t(u − U), Jacobian += A dt/djump on the
+node's own 3x3 block (rows and columns of Dirichlet dofs left alone).
+"""
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+from dolfinx import fem
+import dolfinx.fem.petsc  # noqa: F401
+
+
+class RigidToolContact:
+    def __init__(self, disc, w, facet_tags, face_tags, law, bcs, incremental):
+        """``face_tags``: facet tags of the tool faces; ``w``: the unknown, which
+        holds the total displacement or, if ``incremental`` (updated Lagrangian),
+        the increment since the last commit."""
+        mesh = disc.mesh
+        V = disc.displacement_space
+        component_spaces = [V.sub(i).collapse() for i in range(3)]
+        scalar_space = component_spaces[0][0]
+        owned = scalar_space.dofmap.index_map.size_local
+        ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+        phi = ufl.TestFunction(scalar_space)
+        normal = ufl.FacetNormal(mesh)
+        fixed = np.zeros(len(w.x.array), dtype=bool)
+        for bc in bcs:
+            fixed[bc.dof_indices()[0]] = True
+
+        nodes, areas, normals = [], [], []
+        for tag in face_tags:
+            area = self._nodal(fem.form(phi * ds(tag)))
+            n = np.stack([self._nodal(fem.form(normal[i] * phi * ds(tag))) for i in range(3)], axis=1)
+            on_face = np.flatnonzero(area[:owned] > 0.0)
+            nodes.append(on_face)
+            areas.append(area[on_face])
+            normals.append(n[on_face] / np.linalg.norm(n[on_face], axis=1)[:, None])
+        self.nodes = np.concatenate(nodes)               # local node index per contact point
+        self.areas = np.concatenate(areas)
+        self.normals = np.concatenate(normals)
+        self.dofs = np.stack([component_spaces[i][1] for i in range(3)], axis=1)[self.nodes]
+        self._free = ~fixed[self.dofs]                    # (n_points, 3)
+        self.law = law
+        self.committed = law.initial_state(len(self.nodes))
+        self.trial = self.committed
+        self._w, self._incremental = w, incremental
+        self._committed_displacement = np.zeros((len(self.nodes), 3))
+        self.tool_displacement = np.zeros(3)
+        self._traction = np.zeros((len(self.nodes), 3))
+        self._tangent = np.zeros((len(self.nodes), 3, 3))
+        self.comm = mesh.comm
+
+    @staticmethod
+    def _nodal(form):
+        """A linear form over the P1 scalar space, assembled and summed over ranks, per local node."""
+        b = fem.petsc.assemble_vector(form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        with b.localForm() as local:
+            values = local.array.copy()
+        b.destroy()
+        return values
+
+    def _soil_displacement(self):
+        return self._committed_displacement + self._w.x.array[self.dofs]
+
+    def jump(self):
+        return self._soil_displacement() - self.tool_displacement
+
+    def update(self):
+        """The interface law at the current iterate (call once per iterate)."""
+        self._traction, self._tangent, self.trial = self.law.traction_update(
+            self.jump(), self.normals, self.committed)
+
+    def add_residual(self, b):
+        """Residual (internal − external) += A t at the owned, free dofs."""
+        forces = self.areas[:, None] * self._traction * self._free
+        with b.localForm() as local:
+            np.add.at(local.array, self.dofs.ravel(), forces.ravel())
+
+    def add_jacobian(self, A):
+        free = self._free[:, :, None] & self._free[:, None, :]
+        blocks = self.areas[:, None, None] * self._tangent * free
+        A.setValuesLocalRCV(self.dofs.astype(PETSc.IntType), self.dofs.astype(PETSc.IntType),
+                            blocks, addv=PETSc.InsertMode.ADD)
+
+    def commit(self):
+        self.committed = self.trial
+        if self._incremental:   # the unknown restarts from zero after the commit
+            self._committed_displacement = self._soil_displacement()
+
+    def force(self):
+        """Resultant force of the soil on the tool (3,), summed over ranks."""
+        return self.comm.allreduce((self.areas[:, None] * self._traction).sum(axis=0), op=MPI.SUM)
+
+    def gap(self):
+        """Opening between soil and tool at each contact point (>= 0)."""
+        return np.maximum(-np.einsum("ij,ij->i", self.jump(), self.normals), 0.0)
