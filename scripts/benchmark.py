@@ -1,10 +1,14 @@
-"""Run time against error for the two scenes with a closed-form answer.
+"""Run time against error for the scenes with a closed-form answer.
 
 Each case is one serial `soilbin run --json` subprocess; the error is taken
 against the closed form evaluated from the resolved scene (run folder's scene.toml):
 
-* strip footing (von Mises, plane strain): limit pressure (2 + pi) c
-* elastic column: top settlement p L / M, M = E (1 - nu) / ((1 + nu) (1 - 2 nu))
+* strip footing and strip load (von Mises, plane strain): (2 + pi) c
+* elastic column: top settlement p L / M, M = E (1 - nu) / ((1 + nu) (1 - 2 nu));
+  in large deformation the pressure M ln(L / (L - w)) at the final settlement w
+* Drucker-Prager block: uniaxial strength 2 c cos(phi) / (1 - sin(phi))
+Small- and large-deformation runs of the same scene give the cost of the
+updated Lagrangian option.
 
 `--readme PATH` replaces the text between the benchmark markers in PATH.
 """
@@ -25,12 +29,32 @@ ROOT = Path(__file__).resolve().parent.parent
 SOILBIN = Path(sys.executable).with_name("soilbin")
 FOOTING = "scenes/strip-footing-von-mises.toml"
 COLUMN = "scenes/column-elastic.toml"
+COLUMN_LARGE = "scenes/column-elastic-large.toml"
+BLOCK = "scenes/block-drucker-prager.toml"
+STRIP_LOAD = "scenes/strip-load-von-mises.toml"
 MARKERS = re.compile(r"(<!-- benchmark:start -->\n).*?(<!-- benchmark:end -->)", re.S)
 
 
 def footing_error(summary, scene):
     exact = (2 + math.pi) * scene["materials"]["clay"]["c"]
     return summary["limit_pressure"] / exact - 1
+
+
+def strip_load_error(summary, scene):
+    return summary["collapse_pressure"] / ((2 + math.pi) * scene["materials"]["clay"]["c"]) - 1
+
+
+def block_error(summary, scene):
+    soil = scene["materials"]["soil"]
+    phi = math.radians(soil["phi"])
+    return summary["collapse_stress"] / (2 * soil["c"] * math.cos(phi) / (1 - math.sin(phi))) - 1
+
+
+def column_large_error(summary, scene):
+    soil = scene["materials"]["soil"]
+    E, nu, L = soil["E"], soil["nu"], scene["mesh"]["lz"]
+    M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    return summary["pressure"] / (M * math.log(L / (L - summary["top_settlement"]))) - 1
 
 
 def column_error(summary, scene):
@@ -51,6 +75,12 @@ def cases(quick):
     yield "strip footing, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"], footing_error
     for nz in (6, 24) if quick else (6, 24, 96):
         yield f"column, nz={nz}", COLUMN, [f"mesh.nz={nz}"], column_error
+    yield "column, large deformation to w/L = 0.3", COLUMN_LARGE, [], column_large_error
+    for large in ("false", "true"):
+        kind = "large" if large == "true" else "small"
+        yield f"block, {kind} deformation", BLOCK, [f"analysis.large_deformation={large}"], block_error
+        yield (f"strip load to collapse, {kind} deformation", STRIP_LOAD,
+               [f"analysis.large_deformation={large}"], strip_load_error)
 
 
 def run_case(name, scene_file, sets, error):
@@ -67,6 +97,8 @@ def run_case(name, scene_file, sets, error):
         summary = json.loads(proc.stdout.strip().splitlines()[-1])
         scene = tomllib.loads((Path(out) / "scene.toml").read_text())
     err = f"{100 * error(summary, scene):+.3g}" if summary["converged"] else summary["status"]
+    if summary.get("status") == "collapse":   # force control: the last converged step
+        err += " (collapse)"
     return [name, scene["analysis"]["element"], summary["n_cells"], summary["n_dofs"],
             summary["n_steps"], summary["newton_iterations"], f"{summary['wall_s']:.2f}",
             f"{total:.2f}", err]

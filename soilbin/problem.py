@@ -16,6 +16,7 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 from dolfinx import fem
+import dolfinx.fem.petsc  # noqa: F401
 
 from .forms import updated_lagrangian, virtual_work
 from .forms.discretisation import Discretisation
@@ -24,7 +25,7 @@ from .scene import TOOL, Control
 from .solver.newton import NewtonSolver
 from .solver.quadrature import MaterialPoints
 from .errors import InputError
-from .tensors import rotation_matrix, ufl_mandel
+from .tensors import rotation_matrix, ufl_from_mandel, ufl_mandel
 
 
 class SoilProblem:
@@ -49,8 +50,12 @@ class SoilProblem:
         region_cells = {name: tagged_mesh.cell_tags.find(tagged_mesh.regions[name])
                         for name in scene.regions}
         models = {name: scene.materials[material] for name, material in scene.regions.items()}
+        geostatic = scene.geostatic
         self.points = points = MaterialPoints(disc, w, self.w_committed, strain, region_cells,
-                                              models, keep_strain=self.large)
+                                              models, keep_strain=self.large,
+                                              initial_stress=geostatic and geostatic.stress)
+        if geostatic is not None and disc.element.mixed:
+            self._initial_pressure(geostatic)
 
         V = disc.displacement_space
 
@@ -91,7 +96,8 @@ class SoilProblem:
         if tool is not None and not tool.bonded:
             self.contact = RigidToolContact(disc, w, tagged_mesh.facet_tags,
                                             [tagged_mesh.boundaries[f] for f in tool.faces],
-                                            tool.interface, bcs, incremental=self.large)
+                                            tool.interface, bcs, incremental=self.large,
+                                            initial_stress=geostatic and geostatic.stress)
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))   # traction, force control
         self._magnitude = loading.magnitude
         # In large deformation w is the increment, so is a prescribed displacement.
@@ -115,6 +121,8 @@ class SoilProblem:
         for dead in scene.tractions:
             residual -= traction(dead.magnitude, dead.direction.vector,
                                  ds(tagged_mesh.boundaries[dead.boundary]))
+        if geostatic is not None:   # gravity, -γ e_z (per volume of the step's configuration)
+            residual += geostatic.unit_weight * disc.displacement(v)[2] * disc.measure()
         if self.large:
             jacobian = ufl.derivative(residual, w, ufl.TrialFunction(disc.space))
             self._rotation = points.expression(updated_lagrangian.rotation(disc, w))
@@ -124,6 +132,11 @@ class SoilProblem:
                                                        ufl.TrialFunction(disc.space), v)
         self.newton = NewtonSolver(self.comm, residual, jacobian, w, bcs, self._update, scene.solver,
                                    nodal_terms=[self.contact] if self.contact else [])
+        if scene.tractions or geostatic is not None:   # loads present from the start set the scale
+            dead_loads = fem.petsc.assemble_vector(fem.form(internal - residual))
+            dead_loads.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            self.newton.include_force_scale(dead_loads.norm())
+            dead_loads.destroy()
 
         # Observables on the loaded boundary. The force is the internal force on
         # the loaded dofs along the load direction: the reaction under
@@ -176,6 +189,18 @@ class SoilProblem:
             for face in scene.tool.faces:
                 constraints[face] = dict(enumerate(loading.direction.vector))
         return constraints
+
+    def _initial_pressure(self, geostatic):
+        """Start the mean-dilatation pressure at the projection of the initial mean stress,
+        so that the initial state is in equilibrium."""
+        P, to_parent = self.disc.space.sub(2).collapse()
+        p, q = ufl.TrialFunction(P), ufl.TestFunction(P)
+        mean_stress = ufl.tr(ufl_from_mandel(self.points.stress)) / 3.0
+        dx = self.disc.measure()
+        projection = fem.petsc.LinearProblem(p * q * dx, mean_stress * q * dx, petsc_options={
+            "ksp_type": "preonly", "pc_type": "lu"}).solve()
+        self.w.x.array[to_parent] = projection.x.array
+        self.w_committed.x.array[:] = self.w.x.array
 
     def _update(self):
         """The constitutive and interface updates of one Newton iterate."""

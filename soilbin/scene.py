@@ -11,6 +11,8 @@ import enum
 import tomllib
 from pathlib import Path
 
+import numpy as np
+
 from .errors import InputError
 from .forms.discretisation import Element
 from .interface.mohr_coulomb import MohrCoulombInterface
@@ -104,6 +106,23 @@ TOOL = "tool"   # the loading boundary name that means the rigid tool
 
 
 @dataclasses.dataclass(frozen=True)
+class Geostatic(Params):
+    """Gravity and the K0 initial stress, in equilibrium before the first step:
+    σ_v = γ (z − z_s), σ_h = K0 σ_v (tension positive: compressive below the surface)."""
+    unit_weight: float = param(lo=0.0, doc="unit weight γ of the soil (force/volume)")
+    K0: float = param(lo=0.0, hi=10.0, doc="coefficient of earth pressure at rest")
+    surface: float = param(0.0, doc="z of the ground surface")
+
+    def stress(self, x):
+        """Initial stress (n, 6), Mandel, at the points x (n, 3)."""
+        vertical = self.unit_weight * (x[:, 2] - self.surface)
+        sigma = np.zeros((len(x), 6))
+        sigma[:, 0] = sigma[:, 1] = self.K0 * vertical
+        sigma[:, 2] = vertical
+        return sigma
+
+
+@dataclasses.dataclass(frozen=True)
 class Tool(Params):
     """A rigid tool in a cavity of the soil mesh, displaced as a whole (loading.boundary = 'tool')."""
     faces: tuple[str, ...] = param(doc="soil boundaries against the tool (the cavity faces)")
@@ -170,6 +189,7 @@ class Scene:
     headline: dict           # result key -> Headline
     tool: Tool = None
     tractions: tuple = ()
+    geostatic: Geostatic = None
 
     @property
     def name(self):
@@ -188,6 +208,8 @@ class Scene:
                 "loading": table(self.loading), "analysis": table(self.analysis),
                 "solver": table(self.solver), "output": table(self.output),
                 "headline": {k: v.value for k, v in self.headline.items()}}
+        if self.geostatic is not None:
+            data["geostatic"] = table(self.geostatic)
         if self.tool is not None:
             data["tool"] = {"faces": self.tool.faces, "bonded": self.tool.bonded}
             if self.tool.interface is not None:
@@ -197,7 +219,8 @@ class Scene:
 
 OPTIONAL_TABLES = ("analysis", "solver", "output")   # all defaults: --set may create them
 TOP_LEVEL = ("title", "units", "mesh", "regions", "materials", "supports", "loading",
-             "analysis", "solver", "output", "headline", "tool", "tractions")
+             "analysis", "solver", "output", "headline", "tool", "tractions",
+             "geostatic")
 
 
 def _model_name(model):
@@ -328,6 +351,10 @@ def _parse(raw, path):
     title = raw.get("title", "")
     if not isinstance(title, str) or not title:
         raise InputError("title: a one-line description is required")
+    if "geostatic" in raw and any(from_table(Analysis, raw.get("analysis", {}), "analysis")
+                                  .frame_rotation):
+        raise InputError("geostatic: gravity acts along -z; it cannot be combined with "
+                         "analysis.frame_rotation")
     units = raw.get("units", "")
     if not isinstance(units, str) or not units:
         raise InputError("units: state the units of the scene, e.g. 'lb, in'")
@@ -336,7 +363,9 @@ def _parse(raw, path):
                  analysis=from_table(Analysis, raw.get("analysis", {}), "analysis"),
                  solver=from_table(Solver, raw.get("solver", {}), "solver"),
                  output=from_table(Output, raw.get("output", {}), "output"),
-                 headline=headline, tool=tool, tractions=tractions)
+                 headline=headline, tool=tool, tractions=tractions,
+                 geostatic=(from_table(Geostatic, raw["geostatic"], "geostatic")
+                            if "geostatic" in raw else None))
 
 
 def load_scene(path, overrides=()):

@@ -17,12 +17,15 @@ from petsc4py import PETSc
 from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401
 
+from ..tensors import from_mandel
+
 
 class RigidToolContact:
-    def __init__(self, disc, w, facet_tags, face_tags, law, bcs, incremental):
+    def __init__(self, disc, w, facet_tags, face_tags, law, bcs, incremental, initial_stress=None):
         """``face_tags``: facet tags of the tool faces; ``w``: the unknown, which
         holds the total displacement or, if ``incremental`` (updated Lagrangian),
-        the increment since the last commit."""
+        the increment since the last commit; ``initial_stress(x)`` (n, 6): the
+        soil's in-situ stress, which the tool carries from the start."""
         mesh = disc.mesh
         V = disc.displacement_space
         component_spaces = [V.sub(i).collapse() for i in range(3)]
@@ -49,6 +52,14 @@ class RigidToolContact:
         self.dofs = np.stack([component_spaces[i][1] for i in range(3)], axis=1)[self.nodes]
         self._free = ~fixed[self.dofs]                    # (n_points, 3)
         self.law = law
+        # A tool wished in place carries the in-situ traction t0 = -σ0 n: the jump
+        # is offset by t0_n n / k_n + t0_t / k_s, so that the law returns t0 at zero jump.
+        self._jump0 = np.zeros((len(self.nodes), 3))
+        if initial_stress is not None:
+            x = scalar_space.tabulate_dof_coordinates()[self.nodes]
+            t0 = -np.einsum("pij,pj->pi", from_mandel(initial_stress(x)), self.normals)
+            t0_n = np.einsum("pi,pi->p", t0, self.normals)[:, None] * self.normals
+            self._jump0 = t0_n / law.k_n + (t0 - t0_n) / law.k_s
         self.committed = law.initial_state(len(self.nodes))
         self.trial = self.committed
         self._w, self._incremental = w, incremental
@@ -73,7 +84,7 @@ class RigidToolContact:
         return self._committed_displacement + self._w.x.array[self.dofs]
 
     def jump(self):
-        return self._soil_displacement() - self.tool_displacement
+        return self._soil_displacement() - self.tool_displacement + self._jump0
 
     def update(self):
         """The interface law at the current iterate (call once per iterate)."""

@@ -32,9 +32,9 @@ BUILDERS: dict[str, Builder] = {
     "soil_bin": Builder(
         SoilBinParams, build_soil_bin,
         "soil bin around the cavity of a rigid thin blade (tool, not meshed) at a rake angle, "
-        "graded toward the blade; contact = all cavity faces",
-        ("soil",), ("tool_front", "tool_back", "tool_side", "tool_bottom", "contact", "surface", "base",
-                    "symmetry", "side", "front_end", "back_end")),
+        "graded toward the blade; the contact surface is the four tool_* groups",
+        ("soil",), ("tool_front", "tool_back", "tool_side", "tool_bottom", "surface", "base", "symmetry",
+                    "side", "front_end", "back_end")),
     "retaining_wall": Builder(
         RetainingWallParams, build_retaining_wall,
         "plane-strain slab (one hex layer in y) behind a rigid wall x = 0 down to its toe, graded toward "

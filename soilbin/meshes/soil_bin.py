@@ -3,11 +3,13 @@
 x is the direction of travel, y across, z up; the ground surface is z = 0.
 The blade is a parallelepiped: tool_thickness thick, tool_depth deep, its
 faces inclined at the rake angle to the x axis and leaning back, so its lower
-tip is its most forward point. It is not meshed; the faces of the cavity it
-leaves in the soil (``contact``) carry the soil-tool interface, and
-:func:`tool_faces` gives their planes. The blade lies against y = 0: the glass
-side wall of the bin ("side_wall", the full tool) or the symmetry plane of a
-tool in the middle of the bin ("embedded", half the tool).
+tip is its most forward point. It is not meshed; the four faces of the
+cavity it leaves in the soil, :data:`TOOL_FACES`, carry the soil-tool
+interface, and :func:`tool_faces` gives their planes. A facet carries one
+tag, so there is no group of their union: integrate over ds(all four tags).
+The blade lies against y = 0: the glass side wall of the bin ("side_wall",
+the full tool) or the symmetry plane of a tool in the middle of the bin
+("embedded", half the tool).
 
 The mesh is a grid of structured blocks in (xi, y, z) without the blade's
 block, mapped by x = xi + shear(z) blend(xi): shear(z) = -(z + d) / tan(rake)
@@ -98,6 +100,10 @@ class SoilBinParams(Params):
         return self.tip + self.ahead
 
 
+#: Facet groups of the cavity's faces: the contact surface.
+TOOL_FACES = ("tool_front", "tool_back", "tool_side", "tool_bottom")
+
+
 def tool_faces(p: SoilBinParams) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Face name -> (a point of it, its unit normal from the soil into the tool), mesh coordinates."""
     rake = math.radians(p.rake_angle)
@@ -131,10 +137,9 @@ def build_soil_bin(p: SoilBinParams, comm: MPI.Comm) -> TaggedMesh:
     """Cell group ``soil``; facet groups: see BUILDERS["soil_bin"]."""
     def geometry():
         soil_blocks(p)
-        contact = entities_within(2, x=(p.behind, p.tip), y=(0.0, p.span), z=(-p.tool_depth, 0.0))
-        boundaries = {name: on_plane(2, contact, *plane) for name, plane in tool_faces(p).items()}
+        cavity = entities_within(2, x=(p.behind, p.tip), y=(0.0, p.span), z=(-p.tool_depth, 0.0))
+        boundaries = {name: on_plane(2, cavity, *plane) for name, plane in tool_faces(p).items()}
         boundaries |= {
-            "contact": contact,
             "surface": entities_within(2, z=0.0),
             "base": entities_within(2, z=-p.bin_depth),
             "symmetry": entities_within(2, y=0.0),

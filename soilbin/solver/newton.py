@@ -63,6 +63,10 @@ class NewtonSolver:
         snes.setConvergenceTest(self._converged)
         self._snes = snes
 
+    def include_force_scale(self, norm):
+        """Make the residual floor relative to at least this force norm (e.g. of dead loads)."""
+        self._force_scale = max(self._force_scale, norm)
+
     def _F(self, snes, x, b):
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         x.copy(self._w.vector)

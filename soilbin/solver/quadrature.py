@@ -30,11 +30,13 @@ def quadrature_space(mesh, degree, shape=None):
 class MaterialPoints:
     """Stress, tangent and history at every quadrature point of the local (owned + ghost) cells."""
 
-    def __init__(self, disc, w, w_committed, strain_increment, region_cells, models, keep_strain=False):
+    def __init__(self, disc, w, w_committed, strain_increment, region_cells, models, keep_strain=False,
+                 initial_stress=None):
         """``strain_increment``: UFL Mandel vector of the strain increment the models
         integrate; ``region_cells``: region name -> local cell indices; ``models``:
         region name -> model; ``keep_strain``: also hold that increment at the points
-        in the Function ``strain`` (the updated Lagrangian forms need it)."""
+        in the Function ``strain`` (the updated Lagrangian forms need it);
+        ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3)."""
         mesh = disc.mesh
         degree = disc.element.quadrature_degree
         points, _ = basix.make_quadrature(basix.CellType.hexahedron, degree)
@@ -60,7 +62,12 @@ class MaterialPoints:
         self.index = {name: (np.asarray(cells, dtype=np.int64)[:, None] * self.points_per_cell
                              + np.arange(self.points_per_cell)).ravel()
                       for name, cells in region_cells.items()}
-        self.committed = {name: self.models[name].initial_state(len(idx))
+        stress0 = None
+        if initial_stress is not None:
+            x = self.evaluate(self.expression(ufl.SpatialCoordinate(mesh)))
+            stress0 = initial_stress(x)
+        self.committed = {name: self.models[name].initial_state(
+                              len(idx), None if stress0 is None else stress0[idx])
                           for name, idx in self.index.items()}
         self.trial = dict(self.committed)
         self._stress = np.zeros((n_points, 6))
