@@ -3,7 +3,7 @@
 VENV    := .venv
 PY      := $(VENV)/bin/python
 STAMP   := $(VENV)/.soilbin-installed
-SCENE   ?= scenes/strip-footing-von-mises.toml
+SCENE   ?= scenes/tine-2in-90deg.toml
 OUT     ?= runs
 export OMP_NUM_THREADS := 1
 

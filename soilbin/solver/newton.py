@@ -55,7 +55,10 @@ class NewtonSolver:
         for key, value in {"snes_type": "newtonls", "snes_linesearch_type": options.line_search.value,
                            "snes_max_it": options.max_iterations,
                            "ksp_type": "preonly", "pc_type": "lu",
-                           "pc_factor_mat_solver_type": "mumps"}.items():
+                           "pc_factor_mat_solver_type": "mumps",
+                           # null pivots (e.g. soil yielded at the apex, zero tangent) are
+                           # detected and their solution components set to zero, not an abort
+                           "mat_mumps_icntl_24": 1}.items():
             petsc[key] = value
         snes.setFromOptions()
         snes.setFunction(self._F, self._b)
@@ -122,7 +125,10 @@ class NewtonSolver:
         """Newton from the current ``w``; on success ``w`` holds the solution."""
         self._residuals, self._error = [], None
         self._w.vector.copy(self._x)
-        self._snes.solve(None, self._x)
+        try:
+            self._snes.solve(None, self._x)
+        except PETSc.Error as err:   # e.g. MUMPS failing on a singular tangent
+            raise NewtonFailure(f"the linear solve failed (PETSc error {err.ierr})") from None
         reason = self._snes.getConvergedReason()
         if self._error is not None:
             raise NewtonFailure(str(self._error))

@@ -1,0 +1,53 @@
+"""The tine in the soil bin: interface against bonded, the gap behind the tool, equilibrium."""
+import numpy as np
+import pytest
+from mpi4py import MPI
+from dolfinx import fem
+
+from conftest import make_problem
+from soilbin.forms.virtual_work import internal_force
+from soilbin.solver.stepping import run_load_steps
+
+COARSE = ("mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "mesh.behind=10.0",
+          "mesh.bin_width=10.0", "loading.magnitude=0.04", "loading.steps=2")
+
+
+def solve(*overrides):
+    problem = make_problem("tine-2in-90deg", *COARSE, *overrides)
+    result = run_load_steps(problem, 2, 4, lambda r: None)
+    assert result.complete
+    return problem, result.steps[-1]
+
+
+def support_reaction(problem, boundaries, axis):
+    """Internal force of the soil on the supported dofs along an axis (their reaction)."""
+    disc, tagged = problem.disc, problem.tagged
+    probe = fem.Function(disc.space)
+    for name in boundaries:
+        facets = tagged.facet_tags.find(tagged.boundaries[name])
+        probe.x.array[fem.locate_dofs_topological(disc.displacement_space.sub(axis), 2, facets)] = 1.0
+    form = fem.form(internal_force(disc, problem.points.stress, problem.w, probe))
+    return problem.comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM)
+
+
+def test_gap_opens_behind_the_pushed_tool_and_draft_is_the_supports_reaction():
+    problem, last = solve()
+    contact, tagged = problem.contact, problem.tagged
+    gap = contact.gap()
+    face_of_point = np.repeat([tagged.boundaries[f] for f in problem.scene.tool.faces],
+                              contact.points_per_face)
+    behind = face_of_point == tagged.boundaries["tool_back"]
+    front = face_of_point == tagged.boundaries["tool_front"]
+    assert gap[behind].max() > 0.5 * 0.04          # the soil behind came free of the tool
+    assert gap[front].max() == 0.0                  # the front stays pressed
+    assert last.force > 0.0
+    # the bin holds the soil back with the draft force: the supports' internal force
+    # sums to minus the draft (the tool pushes the soil along +x)
+    reaction = support_reaction(problem, ["base", "back_end", "front_end"], 0)
+    assert -reaction == pytest.approx(last.force, rel=1e-6)
+
+
+def test_bonded_tool_is_stiffer_than_the_interface():
+    _, with_interface = solve()
+    _, bonded = solve("tool.bonded=true")
+    assert bonded.force > with_interface.force
