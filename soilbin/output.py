@@ -60,16 +60,9 @@ class FieldWriter:
         self._x = mesh.geometry.x
         self._reference_x = self._x.copy() if problem.large else None
         self._updates, self._functions = [], []
-        if Field.DISPLACEMENT in fields and problem.large:   # accumulated on P1 already
-            self._functions.append(problem.total_displacement)
-        elif Field.DISPLACEMENT in fields:
-            u = fem.Function(fem.VectorFunctionSpace(mesh, ("Lagrange", 1)), name="displacement")
-            w = problem.w
-            if problem.disc.element.mixed:
-                self._updates.append(lambda: u.interpolate(w.sub(0).collapse()))
-            else:
-                self._updates.append(lambda: u.interpolate(w))
-            self._functions.append(u)
+        if Field.DISPLACEMENT in fields:
+            self._functions.append(problem.displacement_p1())
+            self._updates.append(problem.displacement_p1)
         if Field.STRESS in fields:
             s = fem.Function(fem.TensorFunctionSpace(mesh, ("DG", 0)), name="stress")
             self._updates.append(CellAverage(problem.disc, ufl_from_mandel(problem.points.stress), s))
@@ -85,6 +78,17 @@ class FieldWriter:
                 average()
             self._updates.append(update)
             self._functions.append(e)
+
+        if Field.GAP in fields:
+            gap = fem.Function(problem.contact.scalar_space, name="gap")
+            contact = problem.contact
+
+            def update_gap():   # the widest opening of a node over the faces it touches
+                gap.x.array[:] = 0.0
+                np.maximum.at(gap.x.array, contact.nodes, contact.gap())
+                gap.x.scatter_forward()
+            self._updates.append(update_gap)
+            self._functions.append(gap)
 
     def write(self, t):
         for update in self._updates:

@@ -31,6 +31,7 @@ from .tensors import rotation_matrix, ufl_from_mandel, ufl_mandel
 class SoilProblem:
     def __init__(self, scene, tagged_mesh):
         self.scene, self.tagged = scene, tagged_mesh
+        self._p1 = None
         mesh = tagged_mesh.mesh
         self.comm = mesh.comm
         self.large = scene.analysis.large_deformation
@@ -207,6 +208,16 @@ class SoilProblem:
         self.points.update()
         if self.contact is not None:
             self.contact.update()
+
+    def displacement_p1(self):
+        """The total displacement as a P1 Function (for output)."""
+        if self.large:
+            return self._motion.total
+        if self._p1 is None:
+            self._p1 = fem.Function(fem.VectorFunctionSpace(self.disc.mesh, ("Lagrange", 1)),
+                                    name="displacement")
+        self._p1.interpolate(self.w.sub(0).collapse() if self.disc.element.mixed else self.w)
+        return self._p1
 
     def set_load_factor(self, factor):
         self._factor = factor

@@ -3,6 +3,9 @@ import time
 
 from mpi4py import MPI
 
+from pathlib import Path
+
+from . import figures
 from .meshes import BUILDERS
 from .output import RunFolder
 from .problem import SoilProblem
@@ -27,6 +30,7 @@ def headline_results(scene, records, area):
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None):
     """Solve ``scene``, writing into ``out_dir``; returns the summary dict."""
     start = time.perf_counter()
+    out_dir = Path(out_dir)
     tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
     problem = SoilProblem(scene, tagged)
     folder = RunFolder(out_dir, problem, scene)
@@ -65,4 +69,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None):
         **headline_results(scene, records, problem.area),
     }
     folder.finish(summary)
+    if records and comm.rank == 0:
+        figures.curve_png(records, scene, out_dir / "curve.png")
+    if records and problem.contact is not None:
+        figures.tool_section_png(problem, out_dir / "tool-section.png")
     return summary

@@ -51,6 +51,7 @@ class Field(enum.Enum):
     DISPLACEMENT = "displacement"
     STRESS = "stress"
     PLASTIC_STRAIN = "plastic_strain"
+    GAP = "gap"   # opening between soil and tool (scenes with a tool interface)
 
 
 class Headline(enum.Enum):
@@ -168,7 +169,7 @@ class Solver(Params):
 @dataclasses.dataclass(frozen=True)
 class Output(Params):
     fields: tuple[Field, ...] = param((Field.DISPLACEMENT, Field.STRESS, Field.PLASTIC_STRAIN),
-                                      doc="XDMF fields: displacement, stress, plastic_strain")
+                                      doc="XDMF fields: displacement, stress, plastic_strain, gap")
     every: int = param(1, lo=1, doc="write fields every this many converged steps (and the last)")
 
 
@@ -355,6 +356,9 @@ def _parse(raw, path):
                                   .frame_rotation):
         raise InputError("geostatic: gravity acts along -z; it cannot be combined with "
                          "analysis.frame_rotation")
+    output = from_table(Output, raw.get("output", {}), "output")
+    if Field.GAP in output.fields and (tool is None or tool.bonded):
+        raise InputError("output.fields: 'gap' needs a tool with an interface")
     units = raw.get("units", "")
     if not isinstance(units, str) or not units:
         raise InputError("units: state the units of the scene, e.g. 'lb, in'")
@@ -362,7 +366,7 @@ def _parse(raw, path):
                  materials=materials, regions=dict(regions), supports=supports, loading=loading,
                  analysis=from_table(Analysis, raw.get("analysis", {}), "analysis"),
                  solver=from_table(Solver, raw.get("solver", {}), "solver"),
-                 output=from_table(Output, raw.get("output", {}), "output"),
+                 output=output,
                  headline=headline, tool=tool, tractions=tractions,
                  geostatic=(from_table(Geostatic, raw["geostatic"], "geostatic")
                             if "geostatic" in raw else None))

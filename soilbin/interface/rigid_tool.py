@@ -46,6 +46,7 @@ class RigidToolContact:
             nodes.append(on_face)
             areas.append(area[on_face])
             normals.append(n[on_face] / np.linalg.norm(n[on_face], axis=1)[:, None])
+        self.scalar_space = scalar_space
         self.points_per_face = [len(n) for n in nodes]
         self.nodes = np.concatenate(nodes)               # local node index per contact point
         self.areas = np.concatenate(areas)

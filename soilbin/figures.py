@@ -1,0 +1,58 @@
+"""PNG figures of a run: the load–displacement curve and, with a tool, a section around it."""
+import numpy as np
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def curve_png(records, scene, path):
+    """Force along the loading direction against displacement, one marker per converged step."""
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ax.plot([0.0] + [r.displacement for r in records], [0.0] + [r.force for r in records], "o-", ms=3)
+    ax.set_xlabel(f"displacement along {scene.loading.direction.value} [{scene.units}]")
+    ax.set_ylabel("force [along the loading direction]")
+    ax.set_title(scene.name, fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def tool_section_png(problem, path, depth_fraction=0.5):
+    """Horizontal section through the tool at a fraction of its depth: soil displacement
+    vectors (x-y) and the gap between soil and tool (rank 0 draws; data gathered)."""
+    u = problem.displacement_p1()
+    x = u.function_space.tabulate_dof_coordinates()
+    owned = u.function_space.dofmap.index_map.size_local
+    contact = problem.contact
+    z_tool = contact.scalar_space.tabulate_dof_coordinates()[contact.nodes, 2]
+    z_section = z_tool.min() * depth_fraction
+    spacing = np.diff(np.unique(np.round(x[:owned, 2], 9))).min(initial=np.inf)
+    near = np.abs(x[:owned, 2] - z_section) <= 0.5 * spacing
+    points = contact.scalar_space.tabulate_dof_coordinates()[contact.nodes]
+    on_section = np.abs(points[:, 2] - z_section) <= 0.5 * spacing
+    comm = problem.comm
+    data = comm.gather((x[:owned][near], u.x.array.reshape(-1, 3)[:owned][near],
+                        points[on_section], contact.gap()[on_section]), root=0)
+    if comm.rank != 0:
+        return
+    xs, us, ps, gaps = (np.concatenate(parts) for parts in zip(*data))
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    scale = np.abs(us[:, :2]).max()
+    ax.quiver(xs[:, 0], xs[:, 1], us[:, 0], us[:, 1], np.linalg.norm(us[:, :2], axis=1),
+              angles="xy", scale_units="xy", scale=scale / 0.8 if scale > 0 else 1.0, width=0.003)
+    sc = ax.scatter(ps[:, 0], ps[:, 1], c=gaps, cmap="magma_r", s=18, edgecolors="k", linewidths=0.3)
+    fig.colorbar(sc, ax=ax, label="gap soil-tool")
+    lo, hi = ps.min(axis=0), ps.max(axis=0)
+    reach = 4.0 * max(hi[0] - lo[0], hi[1] - lo[1])
+    ax.set_xlim(lo[0] - reach, hi[0] + 1.5 * reach)
+    ax.set_ylim(max(lo[1] - reach, xs[:, 1].min()), hi[1] + reach)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (travel)")
+    ax.set_ylabel("y")
+    ax.set_title(f"section z = {z_section:.3g}: soil displacement (arrows) and gap at the tool",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
