@@ -79,7 +79,7 @@ class FieldWriter:
             self._updates.append(update)
             self._functions.append(e)
 
-        if Field.GAP in fields:
+        if Field.GAP in fields and problem.contact is not None:
             gap = fem.Function(problem.contact.scalar_space, name="gap")
             contact = problem.contact
 

@@ -51,7 +51,7 @@ class Field(enum.Enum):
     DISPLACEMENT = "displacement"
     STRESS = "stress"
     PLASTIC_STRAIN = "plastic_strain"
-    GAP = "gap"   # opening between soil and tool (scenes with a tool interface)
+    GAP = "gap"   # opening between soil and tool (written only when there is an interface)
 
 
 class Headline(enum.Enum):
@@ -357,8 +357,6 @@ def _parse(raw, path):
         raise InputError("geostatic: gravity acts along -z; it cannot be combined with "
                          "analysis.frame_rotation")
     output = from_table(Output, raw.get("output", {}), "output")
-    if Field.GAP in output.fields and (tool is None or tool.bonded):
-        raise InputError("output.fields: 'gap' needs a tool with an interface")
     units = raw.get("units", "")
     if not isinstance(units, str) or not units:
         raise InputError("units: state the units of the scene, e.g. 'lb, in'")
