@@ -24,7 +24,7 @@ def headline_results(scene, records, area):
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
         Headline.PEAK_PRESSURE: lambda: max(r.force for r in records) / area,
     }
-    return {key: read[how]() for key, how in scene.headline.items()}
+    return {key: read[result.of]() / result.divide_by for key, result in scene.headline.items()}
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None):

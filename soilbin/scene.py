@@ -67,6 +67,14 @@ class Headline(enum.Enum):
     PEAK_FORCE = "peak_force"
 
 
+@dataclasses.dataclass(frozen=True)
+class HeadlineResult(Params):
+    """A headline value: a quantity read off the curve, optionally divided by a
+    scale (to make it dimensionless, e.g. an earth-pressure coefficient)."""
+    of: Headline = param(doc="the quantity read off the curve")
+    divide_by: float = param(1.0, lo=0.0, lo_open=True, doc="scale the value is divided by")
+
+
 AXES = ("x", "y", "z")
 
 
@@ -187,7 +195,7 @@ class Scene:
     analysis: Analysis
     solver: Solver
     output: Output
-    headline: dict           # result key -> Headline
+    headline: dict           # result key -> HeadlineResult
     tool: Tool = None
     tractions: tuple = ()
     geostatic: Geostatic = None
@@ -208,7 +216,7 @@ class Scene:
                 "tractions": [table(t) for t in self.tractions],
                 "loading": table(self.loading), "analysis": table(self.analysis),
                 "solver": table(self.solver), "output": table(self.output),
-                "headline": {k: v.value for k, v in self.headline.items()}}
+                "headline": {k: table(v) for k, v in self.headline.items()}}
         if self.geostatic is not None:
             data["geostatic"] = table(self.geostatic)
         if self.tool is not None:
@@ -343,11 +351,9 @@ def _parse(raw, path):
                              f"boundary; its boundaries: {', '.join(builder.boundaries)}")
 
     headline = {}
-    for key, how in raw.get("headline", {}).items():
-        choices = [h.value for h in Headline]
-        if how not in choices:
-            raise InputError(f"headline.{key} = {how!r}: not one of {', '.join(choices)}")
-        headline[key] = Headline(how)
+    for key, value in raw.get("headline", {}).items():
+        spec = value if isinstance(value, dict) else {"of": value}
+        headline[key] = from_table(HeadlineResult, spec, f"headline.{key}")
 
     title = raw.get("title", "")
     if not isinstance(title, str) or not title:
