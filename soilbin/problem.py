@@ -46,8 +46,9 @@ class SoilProblem:
             strain = (ufl_mandel(virtual_work.enhanced_strain(disc, w))
                       - ufl_mandel(virtual_work.enhanced_strain(disc, self.w_committed)))
         tdim = mesh.topology.dim
+        frame = rotation_matrix(scene.analysis.frame_rotation)
         x = mesh.geometry.x   # the whole scene turned by the frame rotation
-        x[:, :3] = x[:, :3] @ rotation_matrix(scene.analysis.frame_rotation).T
+        x[:, :3] = x[:, :3] @ frame.T
         region_cells = {name: tagged_mesh.cell_tags.find(tagged_mesh.regions[name])
                         for name in scene.regions}
         models = {name: scene.materials[material] for name, material in scene.regions.items()}
@@ -56,7 +57,7 @@ class SoilProblem:
                                               models, keep_strain=self.large,
                                               initial_stress=geostatic and geostatic.stress)
         if geostatic is not None and disc.element.mixed:
-            self._initial_pressure(geostatic)
+            self._initial_pressure()
 
         V = disc.displacement_space
 
@@ -64,7 +65,6 @@ class SoilProblem:
             return tagged_mesh.facet_tags.find(tagged_mesh.boundaries[name])
 
         loading = scene.loading
-        frame = rotation_matrix(scene.analysis.frame_rotation)
         direction = frame @ loading.direction.vector
         self._prescribed = []   # (Constant, coefficient of the prescribed displacement)
         self.bcs = bcs = []
@@ -191,7 +191,7 @@ class SoilProblem:
                 constraints[face] = dict(enumerate(loading.direction.vector))
         return constraints
 
-    def _initial_pressure(self, geostatic):
+    def _initial_pressure(self):
         """Start the mean-dilatation pressure at the projection of the initial mean stress,
         so that the initial state is in equilibrium."""
         P, to_parent = self.disc.space.sub(2).collapse()
