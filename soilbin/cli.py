@@ -1,4 +1,4 @@
-"""The soilbin command line: run a scene, list the scenes."""
+"""The soilbin command line: run a scene, list the scenes, drive a material point."""
 import os
 os.environ.setdefault("OMP_NUM_THREADS", "1")  # before NumPy/PETSc load BLAS: threads fight MPI ranks
 import argparse
@@ -53,7 +53,62 @@ def _parser():
 
     sub.add_parser("list", help="list the scenes in scenes/ with their titles",
                    description="List the scenes shipped in the project's scenes/ folder.")
+    _point_parser(sub)
     return parser
+
+
+POINT_EPILOG = """\
+paths (parameters: --set path.KEY=VALUE; compression positive):
+{paths}
+output (compression positive, the geomechanics convention): p = -tr(sigma)/3,
+q = sqrt(3 J2) (negative when the axial stress is the smaller, as in triaxial
+extension; unsigned in simple shear), eps_v = -tr(eps), eps_axial = -eps_zz,
+sigma1 >= sigma2 >= sigma3; gamma = 2 eps_xz and tau = sigma_xz keep their sign.
+z is the axial direction; simple shear is in the x-z plane.
+
+examples:
+  soilbin point drucker_prager triaxial-compression --set E=4000 --set nu=0.35 \\
+      --set c=0 --set phi=33 --set matching=compression_cone --set path.confining=10
+  soilbin point elastic oedometer --set E=1e4 --set nu=0.3 --set path.axial_strain=0.01
+  soilbin point scenes/block-drucker-prager.toml:soil simple-shear \\
+      --set path.confining=1000 --json
+
+exit status: 0 done, 1 a step could not be converged (the converged steps are
+written), 2 bad input.
+"""
+
+
+def _point_parser(sub):
+    import textwrap
+    from .paths import PATHS
+    from .params import describe
+    lines = []
+    for name, cls in PATHS.items():
+        lines += textwrap.wrap(f"{name}: {' '.join((cls.__doc__ or '').split())}", 79,
+                               initial_indent="  ", subsequent_indent="    ")
+        for line in describe(cls):
+            lines += textwrap.wrap(line, 79, initial_indent="    - ", subsequent_indent="      ")
+    point = sub.add_parser(
+        "point", help="drive one material point of a model along a loading path",
+        description="Drive one material point of a constitutive model (the classes of the FE\n"
+        "solve) along a strain-, stress- or mixed-controlled loading path and write the\n"
+        "output folder: path.csv (one row per step), path.png (q-p stress path,\n"
+        "stress-strain, volumetric strain) and summary.json.",
+        epilog=POINT_EPILOG.format(paths="\n".join(lines)),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    point.add_argument("model", metavar="MODEL",
+                       help="a constitutive model (elastic, drucker_prager, ...: the keys of "
+                            "soilbin.models.MODELS), or SCENE.toml:NAME for the model and "
+                            "parameters of [materials.NAME] in a scene file (or scene name)")
+    point.add_argument("path", metavar="PATH", help=f"loading path: {', '.join(PATHS)}")
+    point.add_argument("--set", dest="overrides", action="append", default=[],
+                       metavar="KEY=VALUE",
+                       help="a model parameter (E=4000, matching=compression_cone; overrides "
+                            "a scene material's) or a path parameter (path.confining=10); "
+                            "repeatable, checked on input")
+    point.add_argument("--out", type=Path, help="output folder (default: runs/point-MODEL-PATH)")
+    point.add_argument("--json", action="store_true",
+                       help="the last stdout line is the summary as one JSON object")
 
 
 def _list_scenes():
@@ -95,8 +150,43 @@ def _run(args):
     return 0 if summary["converged"] else 1
 
 
+def _point(args):
+    from .errors import InputError
+    from .pointdriver import material_table, run_point, split_overrides
+
+    model_table, path_table = split_overrides(args.overrides)
+    model, material, name = args.model, None, args.model
+    if ":" in model:   # SCENE.toml:NAME
+        material = model
+        model, table = material_table(material)
+        if model is None:
+            raise InputError(f"{material}: the material has no 'model' key")
+        model_table = {**table, **model_table}
+        scene, _, material_name = material.rpartition(":")
+        name = f"{Path(scene).stem}-{material_name}"
+    out = args.out or Path("runs") / f"point-{name}-{args.path}"
+    summary = run_point(model, model_table, args.path, path_table, out, material)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"{summary['status']}: {summary['n_steps']} steps, {summary['newton_iterations']} "
+              f"Newton iterations, {summary['cuts']} cuts; results in {out}", file=sys.stderr)
+        final = summary["final"]
+        print(f"q_peak = {summary['q_peak']:.6g} at p = {summary['p_at_q_peak']:.6g}; final "
+              f"p = {final['p']:.6g}, q = {final['q']:.6g}, eps_v = {final['eps_v']:.6g}")
+    if summary["message"]:
+        print(f"soilbin: {summary['message']}", file=sys.stderr)
+    return 0 if summary["converged"] else 1
+
+
 def main(argv=None):
     args = _parser().parse_args(argv)
+    if args.command == "point":   # NumPy only: no DOLFINx to import
+        try:
+            return _point(args)
+        except SoilbinError as err:
+            print(f"soilbin: error: {err}", file=sys.stderr)
+            return 2
     import dolfinx  # noqa: F401  (configures logging; then quieten the JIT's INFO lines)
     logging.getLogger().setLevel(logging.WARNING)
     try:
