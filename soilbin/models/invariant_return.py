@@ -1,0 +1,470 @@
+"""Return-mapping parts shared by the isotropic two-invariant soil models
+(Cam-Clay, modified Cam-Clay, the DiMaggio–Sandler and modified caps).
+
+Inside these models the geomechanics convention is used, compression positive:
+
+    p = -tr(sigma) / 3,   J = sqrt(J2) = |s| / sqrt2,   I1 = 3 p,   e_v = -tr(deps),
+
+and the stress goes back to the code's tension-positive Mandel vector as
+
+    sigma = -p I + s_tr J / J_tr = -p I + sqrt2 J n,   n = s_tr / |s_tr|:
+
+an associated return with isotropic elasticity and a yield function of
+(p, J) keeps the deviatoric direction of the trial stress, so every local
+problem is one in the (p, J) plane.
+
+Elasticity (:class:`LinearBulk`, :class:`ExponentialBulk`): a constant
+shear modulus G, so J_tr = |s_n + 2G dev(deps)| / sqrt2, and a volumetric
+law written through the elastic volumetric strain E(p; p_n) that takes the
+mean stress from p_n to p (linear: (p - p_n)/K; exponential, the
+kappa-line of critical-state soil mechanics: kappa* ln((p + p_min)/(p_n + p_min))).
+The plastic compaction of a step is then de_v - E(p; p_n), exactly, for
+either law.
+
+Local problem on one smooth surface f(p, J, h) = 0 with associated flow and
+one scalar hardening variable h (:func:`smooth_return`, backward Euler):
+
+    r_p = E(p; p_n) - de_v + dgamma f_p      volumetric strain split
+    r_J = (J - J_tr) / G + dgamma f_J        deviatoric strain split
+    r_f = f(p, J, h)                         consistency
+    r_h = r_h(h, dgamma f_p)                 hardening driven by the plastic compaction
+
+(dgamma f_p is the plastic compaction, dgamma f_J the plastic shear strain
+conjugate to J; dgamma >= 0 at a solution.) It is solved by :func:`newton`, a Newton iteration with a
+backtracking line search on the scaled residual, vectorised over points.
+The converged Jacobian gives, by the implicit-function theorem, the
+sensitivities of (p, J) to the two inputs (de_v, J_tr), and with them the
+consistent tangent (:func:`invariant_tangent`)
+
+    C = p_e I(x)I - sqrt2 G p_J I(x)n - sqrt2 J_e n(x)I + 2G J_J n(x)n
+        + 2G (J / J_tr) (P_dev - n(x)n),
+
+p_e = dp/de_v, p_J = dp/dJ_tr, J_e = dJ/de_v, J_J = dJ/dJ_tr, from
+dsigma = -dp I + sqrt2 dJ n + sqrt2 J dn, de_v = -I.deps, dJ_tr = sqrt2 G n.deps
+and dn = (sqrt2 G / J_tr)(P_dev - n(x)n) deps. Corners and vertices, where
+(p, J) is fixed or given by a scalar equation, use the same formula with
+their own sensitivities.
+
+Robustness: the Newton iteration is globalised by backtracking on the
+residual norm; points where it still fails (a trial state far outside a
+strongly nonlinear surface) are solved again by continuation in the fraction
+of the strain increment, from the point where the trial path leaves the
+elastic domain (:func:`_continuation`) - the answer is still the one-step
+backward-Euler solution, so the tangent is unchanged. Roots with a negative
+multiplier or J < 0 are rejected. Scalar problems (the failure surface of
+the caps, the Cam-Clay reduction) use a bracketed Newton-bisection
+(:func:`scalar_root`). A local solve that does not converge raises
+:class:`ReturnMapError` naming the model and the number of failing points;
+the step driver then cuts the step.
+"""
+import dataclasses
+
+import numpy as np
+
+from ..errors import ReturnMapError
+from ..tensors import IDENTITY, P_DEV, SQRT2, deviator, trace
+
+#: yield_state codes shared by the soil models (0-3 as the cone models):
+#: elastic; on the failure (shear) surface, or for Cam-Clay on the yield
+#: surface dry of critical (dilating); at the apex of the failure surface or
+#: its corner with the tension cut-off (for Cam-Clay: at the origin, sigma = 0);
+#: on the tension cut-off; on the cap, or for Cam-Clay on the yield surface
+#: wet of critical (compacting); at the corner of cap and failure surface;
+#: at the vertex of Cam-Clay on the mean-stress axis (p = p_c, q = 0).
+ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER, TIP = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
+#: Trial states with f_tr below this fraction of the stress scale are elastic.
+YIELD_TOL = 1e-12
+#: Local Newton: tolerance on the scaled residual, iterations, line-search halvings.
+NEWTON_TOL = 1e-12
+MAX_ITERATIONS = 60
+MAX_HALVINGS = 40
+#: Residual a stalled line search still accepts as converged (rounding floor).
+STALL_TOL = 1e-10
+
+
+class LinearBulk:
+    """p = p_n + K e: constant bulk modulus."""
+
+    def __init__(self, K):
+        self.K = K
+
+    def pressure(self, p_n, e):
+        return p_n + self.K * e
+
+    def strain(self, p, p_n):
+        """Elastic volumetric strain (compression positive) taking p_n to p."""
+        return (p - p_n) / self.K
+
+    def compliance(self, p):
+        """dE/dp = 1 / K(p)."""
+        return np.full(np.shape(p), 1.0 / self.K)
+
+    def admissible(self, p):
+        return np.isfinite(p)
+
+
+class ExponentialBulk:
+    """K = (p + p_min) / kappa_star, integrated exactly over a step:
+    p + p_min = (p_n + p_min) exp(e / kappa_star)."""
+
+    def __init__(self, kappa_star, p_min):
+        self.kappa_star, self.p_min = kappa_star, p_min
+
+    def pressure(self, p_n, e):
+        return (p_n + self.p_min) * np.exp(np.minimum(e / self.kappa_star, 700.0)) - self.p_min
+
+    def strain(self, p, p_n):
+        return self.kappa_star * np.log((p + self.p_min) / (p_n + self.p_min))
+
+    def compliance(self, p):
+        return self.kappa_star / (p + self.p_min)
+
+    def admissible(self, p):
+        return p + self.p_min > 0.0
+
+
+@dataclasses.dataclass
+class Trial:
+    """The elastic predictor in invariants (see the module doc)."""
+
+    p_n: np.ndarray      # mean stress at the start of the step
+    de_v: np.ndarray     # volumetric strain increment, compression positive
+    s_n: np.ndarray      # deviator at the start of the step (n, 6)
+    s_tr: np.ndarray     # trial deviator (n, 6)
+    J_tr: np.ndarray     # sqrt(J2) of the trial deviator
+    n: np.ndarray        # s_tr / |s_tr| (zero where s_tr = 0)
+
+    @classmethod
+    def split(cls, deps, stress_n, G):
+        s_n = deviator(stress_n)
+        s_tr = s_n + 2.0 * G * deviator(deps)
+        s_norm = np.linalg.norm(s_tr, axis=-1)
+        n = s_tr / np.where(s_norm > 0.0, s_norm, 1.0)[:, None]
+        return cls(-trace(stress_n) / 3.0, -trace(deps), s_n, s_tr, s_norm / SQRT2, n)
+
+
+def invariants(stress):
+    """(p, J) of (n, 6) stresses, compression-positive p."""
+    s = deviator(stress)
+    return -trace(stress) / 3.0, np.sqrt(0.5 * np.sum(s * s, axis=-1))
+
+
+class Response:
+    """(p, J), their sensitivities and the yield_state at every point; starts
+    as the elastic response to the trial and is overwritten mode by mode."""
+
+    def __init__(self, trial, bulk, p_tr):
+        m = len(p_tr)
+        self.trial = trial
+        self.p = p_tr.copy()
+        self.J = trial.J_tr.copy()
+        with np.errstate(all="ignore"):
+            self.p_e = 1.0 / bulk.compliance(p_tr)
+        self.p_J = np.zeros(m)
+        self.J_e = np.zeros(m)
+        self.J_J = np.ones(m)
+        self.ratio = np.ones(m)      # J / J_tr
+        self.code = np.full(m, ELASTIC)
+
+    def fixed(self, idx, p, J, code):
+        """(p, J) fixed by the geometry (apex, corner, vertex): only n turns."""
+        J_tr = self.trial.J_tr[idx]
+        J = np.broadcast_to(np.asarray(J, dtype=float), J_tr.shape)
+        self.p[idx], self.J[idx] = p, J
+        self.p_e[idx] = self.p_J[idx] = self.J_e[idx] = self.J_J[idx] = 0.0
+        self.ratio[idx] = np.divide(J, J_tr, out=np.zeros_like(J_tr), where=J_tr > 0.0)
+        self.code[idx] = code
+
+    def solved(self, idx, p, J, p_e, p_J, J_e, J_J, code):
+        """(p, J) from a local solve with its sensitivities to (de_v, J_tr)."""
+        self.p[idx], self.J[idx] = p, J
+        self.p_e[idx], self.p_J[idx], self.J_e[idx], self.J_J[idx] = p_e, p_J, J_e, J_J
+        J_tr = self.trial.J_tr[idx]
+        # As J_tr -> 0 on a smooth surface J / J_tr tends to dJ/dJ_tr.
+        self.ratio[idx] = np.where(J_tr > 0.0, J / np.where(J_tr > 0.0, J_tr, 1.0), J_J)
+        self.code[idx] = code
+
+    def finish(self, bulk, G):
+        """(sigma, C_tan, plastic compaction, equivalent plastic strain increment)."""
+        t = self.trial
+        sigma = t.s_tr * self.ratio[:, None] - np.outer(self.p, IDENTITY)
+        tangent = invariant_tangent(self.p_e, self.p_J, self.J_e, self.J_J, self.ratio, t.n, G)
+        plastic = self.code != ELASTIC
+        # Plastic strain: compaction de_v - E(p; p_n) and deviator (s_tr - s) / 2G.
+        with np.errstate(all="ignore"):
+            compaction = np.where(plastic, t.de_v - bulk.strain(self.p, t.p_n), 0.0)
+        shear = np.where(plastic, t.J_tr * (1.0 - self.ratio) / (SQRT2 * G), 0.0)
+        eq = np.sqrt(2.0 / 3.0) * np.sqrt(compaction**2 / 3.0 + shear**2)
+        return sigma, tangent, compaction, eq
+
+
+def invariant_tangent(p_e, p_J, J_e, J_J, ratio, n, G):
+    """The consistent tangent of the module doc from the (p, J) sensitivities."""
+    two_g_ratio = 2.0 * G * ratio
+    C = two_g_ratio[:, None, None] * P_DEV
+    C[:, :3, :3] += p_e[:, None, None]
+    C[:, :3, :] -= (SQRT2 * G * p_J)[:, None, None] * n[:, None, :]      # I (x) n
+    C[:, :, :3] -= (SQRT2 * J_e)[:, None, None] * n[:, :, None]          # n (x) I
+    C += ((2.0 * G * J_J - two_g_ratio)[:, None] * n)[:, :, None] * n[:, None, :]
+    return C
+
+
+def _solve(jac, rhs):
+    """Batched solve jac x = rhs, rhs (m, k) or (m, k, c); pseudo-inverse if singular."""
+    vector = rhs.ndim == 2
+    b = rhs[..., None] if vector else rhs
+    try:
+        x = np.linalg.solve(jac, b)
+    except np.linalg.LinAlgError:
+        x = np.linalg.pinv(jac) @ b
+    return x[..., 0] if vector else x
+
+
+def newton(evaluate, admissible, x0, tol=NEWTON_TOL):
+    """Line-searched Newton for many small systems at once.
+
+    ``evaluate(x, idx)`` gives the scaled residuals (m, k) and Jacobians
+    (m, k, k) of the systems ``idx`` at ``x`` (m, k); ``admissible(x, idx)``
+    (m,) says where an iterate may go. Each step is halved until the merit
+    |r|^2 / 2 decreases (Armijo) at an admissible point. A converged point
+    gets one more full step (to rounding accuracy) where it does not increase
+    the residual. Returns (x, Jacobian at x, converged).
+    """
+    x = np.array(x0, dtype=float)
+    m = len(x)
+    converged = np.zeros(m, dtype=bool)
+    idx = np.arange(m)
+    r, jac = evaluate(x, idx)
+    for _ in range(MAX_ITERATIONS):
+        norm = np.abs(r).max(axis=1)
+        done = norm <= tol
+        converged[idx[done]] = True
+        idx, r, jac, norm = idx[~done], r[~done], jac[~done], norm[~done]
+        if idx.size == 0:
+            break
+        dx = -_solve(jac, r)
+        merit = 0.5 * np.sum(r * r, axis=1)
+        step = np.ones(len(idx))
+        todo = np.arange(len(idx))
+        moved = np.zeros(len(idx), dtype=bool)
+        new_x, new_r, new_jac = x[idx].copy(), r.copy(), jac.copy()
+        for _ in range(MAX_HALVINGS):
+            xt = x[idx[todo]] + step[todo, None] * dx[todo]
+            rt, jt = evaluate(xt, idx[todo])
+            mt = 0.5 * np.sum(rt * rt, axis=1)
+            good = (admissible(xt, idx[todo]) & np.isfinite(mt) & np.isfinite(jt).all(axis=(1, 2))
+                    & (mt <= (1.0 - 1e-4 * step[todo]) * merit[todo]))
+            g = todo[good]
+            new_x[g], new_r[g], new_jac[g] = xt[good], rt[good], jt[good]
+            moved[g] = True
+            todo = todo[~good]
+            if todo.size == 0:
+                break
+            step[todo] *= 0.5
+        x[idx] = new_x
+        # A stalled line search at the rounding floor counts as converged.
+        stalled = ~moved
+        converged[idx[stalled & (norm <= STALL_TOL)]] = True
+        keep = moved
+        idx, r, jac = idx[keep], new_r[keep], new_jac[keep]
+    # Polish the converged points with one more full step.
+    idx = np.flatnonzero(converged)
+    if idx.size:
+        r, jac = evaluate(x[idx], idx)
+        xt = x[idx] - _solve(jac, r)
+        rt, jt = evaluate(xt, idx)
+        better = (admissible(xt, idx) & np.isfinite(rt).all(axis=1)
+                  & (np.abs(rt).max(axis=1) <= np.abs(r).max(axis=1)))
+        x[idx[better]] = xt[better]
+        jac[better] = jt[better]
+        full_jac = np.zeros((m,) + jac.shape[1:])
+        full_jac[idx] = jac
+    else:
+        full_jac = np.zeros((m, x.shape[1], x.shape[1]))
+    return x, full_jac, converged
+
+
+def scalar_root(fun, lo, hi, x0=None):
+    """Roots of scalar equations g(x) = 0 at many points, g(lo) <= 0 <= g(hi):
+    Newton steps kept inside the shrinking bracket, bisection otherwise.
+    ``fun(x, idx)`` -> (g, g') for the points ``idx``. Returns (x, converged)."""
+    lo, hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
+    x = 0.5 * (lo + hi) if x0 is None else np.clip(x0, lo, hi)
+    converged = np.zeros(len(x), dtype=bool)
+    active = np.arange(len(x))
+    eps = np.finfo(float).eps
+    for _ in range(300):
+        g, dg = fun(x[active], active)
+        xa = x[active]
+        zero = g == 0.0
+        neg = g < 0.0
+        lo[active[neg]] = xa[neg]
+        hi[active[~neg & ~zero]] = xa[~neg & ~zero]
+        with np.errstate(all="ignore"):
+            xn = xa - g / dg
+        inside = np.isfinite(xn) & (xn > lo[active]) & (xn < hi[active])
+        xn = np.where(inside, xn, 0.5 * (lo[active] + hi[active]))
+        xn = np.where(zero, xa, xn)
+        scale = np.abs(lo[active]) + np.abs(hi[active])
+        done = (zero | (np.abs(xn - xa) <= 4.0 * eps * scale)
+                | (hi[active] - lo[active] <= 4.0 * eps * scale))
+        x[active] = xn
+        converged[active[done]] = True
+        active = active[~done]
+        if active.size == 0:
+            break
+    return x, converged
+
+
+def smooth_return(surface, hardening, bulk, G, trial, idx, p_tr, h_n, x0, stress_scale,
+                  log_shift=None, admissible=None, hardening_row=None):
+    """Backward-Euler return of the points ``idx`` onto one smooth hardening
+    surface (the local problem of the module doc).
+
+    ``surface(p, J, h, k)`` -> (f, f_p, f_J, f_h, f_pp, f_pJ, f_JJ, f_ph, f_Jh, f_scale)
+    for the points ``idx[k]``; ``hardening(h, c, k)`` -> (r_h, dr_h/dh, dr_h/dc), the
+    hardening residual with the compaction c = dgamma f_p of the step;
+    ``x0`` (m, 4) the starting (xi, J, dgamma, h), where p = exp(xi) - log_shift
+    if ``log_shift`` is a number (a logarithmic pressure variable: Cam-Clay's
+    ln p, or ln(p + p_min) of the exponential bulk law, in which the
+    volumetric residual is linear) and p = xi if it is None; ``stress_scale``
+    (m,) scales the strain residuals, ``hardening_row`` (m,) the hardening
+    residual (default: as a strain). Points where Newton fails from ``x0`` are
+    solved by continuation (:func:`_continuation`); a root with dgamma < 0 or
+    J < 0 is no solution. Returns (p, J, dgamma, h, (p_e, p_J, J_e, J_J), converged).
+    """
+    m = len(idx)
+    de_v, J_tr, p_n = trial.de_v[idx], trial.J_tr[idx], trial.p_n[idx]
+    with np.errstate(all="ignore"):
+        K_ref = np.where(bulk.admissible(p_tr), 1.0 / bulk.compliance(p_tr), 0.0)
+    strain_row = np.maximum(K_ref, G) / stress_scale      # strain residual -> relative
+    h_row = strain_row if hardening_row is None else hardening_row
+
+    def pressure(xi):
+        if log_shift is not None:
+            e = np.exp(xi)
+            return e - log_shift, e
+        return xi, np.ones_like(xi)
+
+    def system(de_in, J_in, sel):
+        """(evaluate, admissible) for the points sel (positions in idx) with inputs
+        de_in, J_in (aligned with sel)."""
+        def evaluate(x, kk):
+            k = sel[kk]
+            xi, J, dg, h = x.T
+            p, dp = pressure(xi)
+            f, fp, fJ, fh, fpp, fpJ, fJJ, fph, fJh, f_scale = surface(p, J, h, k)
+            rh, rh_h, rh_c = hardening(h, dg * fp, k)
+            c = bulk.compliance(p)
+            r = np.stack([bulk.strain(p, p_n[k]) - de_in[kk] + dg * fp,
+                          (J - J_in[kk]) / G + dg * fJ,
+                          f,
+                          rh], axis=1)
+            jac = np.empty((len(k), 4, 4))
+            jac[:, 0] = np.stack([(c + dg * fpp) * dp, dg * fpJ, fp, dg * fph], axis=1)
+            jac[:, 1] = np.stack([dg * fpJ * dp, 1.0 / G + dg * fJJ, fJ, dg * fJh], axis=1)
+            jac[:, 2] = np.stack([fp * dp, fJ, np.zeros_like(fp), fh], axis=1)
+            jac[:, 3] = np.stack([rh_c * dg * fpp * dp, rh_c * dg * fpJ, rh_c * fp,
+                                  rh_h + rh_c * dg * fph], axis=1)
+            scale = np.stack([strain_row[k], strain_row[k], 1.0 / f_scale, h_row[k]], axis=1)
+            return r * scale, jac * scale[:, :, None]
+
+        def ok(x, kk):
+            xi, J, _, h = x.T
+            p = pressure(xi)[0]
+            good = bulk.admissible(p)
+            return good if admissible is None else good & admissible(p, J, h, sel[kk])
+        return evaluate, ok
+
+    def solution(x, sel):
+        """Roots that are solutions: J >= 0 and dgamma >= 0 up to rounding."""
+        return ((x[:, 1] >= -NEWTON_TOL * stress_scale[sel])
+                & (x[:, 2] >= -NEWTON_TOL * (np.abs(de_v[sel]) + J_tr[sel] / G)))
+
+    every = np.arange(m)
+    with np.errstate(all="ignore"):
+        x, jac, converged = newton(*system(de_v, J_tr, every), x0)
+        converged &= solution(x, every)
+        failed = np.flatnonzero(~converged)
+        if failed.size:
+            def trial_path(t, sel):
+                """(p_tr, J_tr, xi_tr) of the points sel at the fraction t of the step."""
+                s = trial.s_n[idx[sel]] + t[:, None] * (trial.s_tr[idx[sel]] - trial.s_n[idx[sel]])
+                p = bulk.pressure(p_n[sel], t * de_v[sel])
+                xi = p if log_shift is None else np.log(p + log_shift)
+                return t * de_v[sel], np.linalg.norm(s, axis=1) / SQRT2, xi
+
+            def f_path(t, sel):
+                _, J, xi = trial_path(t, sel)
+                return surface(pressure(xi)[0], J, h_n[sel], sel)[0]
+
+            xf, jf, cf = _continuation(system, trial_path, f_path, failed, h_n[failed])
+            x[failed], jac[failed], converged[failed] = xf, jf, cf & solution(xf, failed)
+    xi, J, dgamma, h = x.T
+    # Iterates may cross J = 0 or dgamma = 0; a solution may not, beyond rounding.
+    J, dgamma = np.maximum(J, 0.0), np.maximum(dgamma, 0.0)
+    p, dp = pressure(xi)
+    # Implicit-function theorem: the inputs de_v, J_tr enter r_p as -de_v and r_J as -J_tr / G.
+    rhs = np.zeros((m, 4, 2))
+    rhs[:, 0, 0] = strain_row
+    rhs[:, 1, 1] = strain_row / G
+    jac[~converged] = np.eye(4)
+    with np.errstate(all="ignore"):
+        dx = _solve(jac, rhs)
+    sens = (dp * dx[:, 0, 0], dp * dx[:, 0, 1], dx[:, 1, 0], dx[:, 1, 1])
+    return p, J, dgamma, h, sens, converged
+
+
+#: Continuation: numbers of equal parts of the plastic part of the step tried in turn.
+CONTINUATION_PARTS = (4, 16, 64, 256)
+
+
+def _continuation(system, trial_path, f_path, sel, h_n):
+    """Solve the one-step problems of the points ``sel`` by continuation in the
+    fraction t of the strain increment: from the elastic fraction t_e (where
+    the trial path meets the surface and the solution is the trial state with
+    dgamma = 0) to t = 1 in N equal parts, each Newton solve starting from the
+    last; N grows over :data:`CONTINUATION_PARTS` for the points that still
+    fail. The answer is the one-step backward-Euler solution itself (the
+    intermediate problems only lead Newton to it), so the tangent is unchanged.
+    Returns (x, Jacobian, converged) aligned with ``sel``."""
+    m = len(sel)
+    # Elastic fraction by bisection (t_e = 0 if the step starts outside the surface).
+    lo, hi = np.zeros(m), np.ones(m)
+    inside = f_path(lo, sel) <= 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        out = f_path(mid, sel) > 0.0
+        hi = np.where(out, mid, hi)
+        lo = np.where(out, lo, mid)
+    t_e = np.where(inside, lo, 0.0)
+    x = np.zeros((m, 4))
+    jac = np.zeros((m, 4, 4))
+    converged = np.zeros(m, dtype=bool)
+    todo = np.arange(m)
+    for parts in CONTINUATION_PARTS:
+        _, J0, xi0 = trial_path(t_e[todo], sel[todo])
+        xk = np.stack([xi0, J0, np.zeros(todo.size), h_n[todo]], axis=1)
+        alive = np.ones(todo.size, dtype=bool)
+        for k in range(1, parts + 1):
+            live = np.flatnonzero(alive)
+            t = t_e[todo[live]] + (1.0 - t_e[todo[live]]) * k / parts
+            de_in, J_in, _ = trial_path(t, sel[todo[live]])
+            xs, js, cs = newton(*system(de_in, J_in, sel[todo[live]]), xk[live])
+            xk[live] = xs
+            alive[live[~cs]] = False
+            if k == parts:
+                done = live[cs]
+                x[todo[done]], jac[todo[done]], converged[todo[done]] = xs[cs], js[cs], True
+        todo = todo[~alive]
+        if todo.size == 0:
+            break
+    return x, jac, converged
+
+
+def check_converged(model, converged, total):
+    """Raise ReturnMapError naming the model and the failing points."""
+    failed = np.count_nonzero(~converged)
+    if failed:
+        raise ReturnMapError(f"{type(model).__name__}: local return mapping did not converge "
+                             f"at {failed} of {total} points")

@@ -1,0 +1,332 @@
+"""DiMaggio–Sandler and modified cap models: consistent tangents by central
+differences in every return mode, returns onto the right surfaces, the
+hardening law under hydrostatic loading, a cap that stays put on unloading,
+triaxial strength, and input checks."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from soilbin.errors import InputError
+from soilbin.models import MODELS, DiMaggioSandler, ModifiedCap
+from soilbin.models.cap import SECTION_VII5
+from soilbin.params import from_table
+from soilbin.tensors import IDENTITY, SQRT2, deviator, trace
+
+# yield_state codes.
+S_ELASTIC, S_FAILURE, S_CORNER, S_CUTOFF, S_CAP, S_CAP_CORNER = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0
+
+VII5 = dict(SECTION_VII5)                                   # psi
+DS = {k: v for k, v in VII5.items() if k != "B"}
+MODIFIED = ModifiedCap(**VII5, X0=20.0)
+SANDLER = DiMaggioSandler(**DS, X0=20.0)
+# With cohesion (A > C: the apex in tension) and a tension cut-off below it.
+MODIFIED_T = ModifiedCap(**{**VII5, "A": 8.0}, X0=20.0, tension_cutoff=0.5)
+SANDLER_T = DiMaggioSandler(**{**DS, "A": 8.0}, X0=20.0, tension_cutoff=1.0)
+ALL = [MODIFIED, SANDLER, MODIFIED_T, SANDLER_T]
+
+
+def model_id(model):
+    name = type(model).__name__
+    return name + (f"-T{model.tension_cutoff:g}" if math.isfinite(model.tension_cutoff) else "")
+
+
+def i1_j(sigma):
+    """Compression-positive I1 and sqrt(J2)."""
+    s = deviator(sigma)
+    return -trace(sigma), np.sqrt(0.5 * np.sum(s * s, axis=-1))
+
+
+def unit_deviator(seed):
+    n = deviator(np.random.default_rng(seed).standard_normal(6))
+    return n / np.linalg.norm(n)
+
+
+def mode_points(model):
+    """(deps, mean stress p_n (compression positive), expected yield_state), one
+    point per return mode, all from the initial cap X0 = 20."""
+    n = unit_deviator(1)
+    I = IDENTITY
+    if not math.isfinite(model.tension_cutoff):
+        cases = [(1e-5 * n - 1e-5 * I, 3.0, S_ELASTIC),
+                 (2e-3 * n, 3.0, S_FAILURE),
+                 (1e-2 * I + 1e-4 * n, 0.5, S_CORNER),          # the apex (A = C: I1 = 0)
+                 (-3e-3 * I + 5e-4 * n, 5.0, S_CAP),
+                 (1e-2 * n, 3.85, S_CAP_CORNER)]               # I1_n = 11.55 just below L
+    else:
+        cases = [(1e-5 * n - 1e-5 * I, 3.0, S_ELASTIC),
+                 (2e-3 * n, 1.0, S_FAILURE),
+                 (3e-4 * I + 1e-5 * n, 0.0, S_CUTOFF),
+                 (3e-3 * I + 3e-3 * n, 0.0, S_CORNER),          # failure surface / cut-off
+                 (-3e-3 * I + 5e-4 * n, 5.0, S_CAP),
+                 (1e-2 * n, 2.8, S_CAP_CORNER)]
+    deps = np.array([c[0] for c in cases])
+    stress = np.array([-c[1] * IDENTITY for c in cases])
+    return deps, stress, np.array([c[2] for c in cases])
+
+
+@pytest.mark.parametrize("model", ALL, ids=model_id)
+def test_tangent_matches_central_differences(model):
+    deps, stress, expected = mode_points(model)
+    state = model.initial_state(len(deps), stress)
+    assert np.ptp(state["cap_X"]) == 0.0 and state["cap_X"][0] == pytest.approx(20.0, rel=1e-14)
+    _, tangent, new = model.update(deps, state)
+    np.testing.assert_array_equal(new["yield_state"], expected)
+    h = 1e-8
+    fd = np.empty_like(tangent)
+    for j in range(6):
+        step = np.zeros(6)
+        step[j] = h
+        fd[:, :, j] = (model.update(deps + step, state)[0]
+                       - model.update(deps - step, state)[0]) / (2.0 * h)
+    error = np.abs(fd - tangent).max(axis=(1, 2)) / np.abs(model.stiffness).max()
+    assert error.max() < 1e-6, dict(zip(expected, error))
+
+
+@pytest.mark.parametrize("model", ALL, ids=model_id)
+def test_returned_stresses_lie_on_the_right_surfaces(model):
+    rng = np.random.default_rng(2)
+    m = 3000
+    deps = 1e-2 * rng.uniform(0, 1, (m, 1)) ** 2 * (rng.standard_normal((m, 6))
+                                                      + rng.standard_normal((m, 1)) * IDENTITY)
+    state = model.initial_state(m, np.tile(-3.0 * IDENTITY, (m, 1)))
+    sigma, _, new = model.update(deps, state)
+    ys = new["yield_state"]
+    counts = {v: np.count_nonzero(ys == v) for v in np.unique(ys)}
+    expected = {S_ELASTIC, S_FAILURE, S_CORNER, S_CAP, S_CAP_CORNER}
+    if math.isfinite(model.tension_cutoff):
+        expected.add(S_CUTOFF)
+    assert set(counts) == expected and min(counts.values()) > 10, counts
+    I1, J = i1_j(sigma)
+    F = model.failure(I1)[0]
+    L, R = new["cap_L"], model.R
+    F_L = model.failure(L)[0]
+    p_lo, J_lo, _ = model.lowest
+    tol = 1e-10 * 20.0
+    # Admissible everywhere: below the failure surface, inside the cap, above the cut-off.
+    assert (J - F).max() <= tol and (3 * p_lo - I1).max() <= tol
+    cap_side = I1 > L
+    assert (np.hypot((I1 - L) / R, J) - F_L)[cap_side].max() <= tol
+    # On the surfaces the labels name.
+    assert np.abs((J - F)[ys == S_FAILURE]).max() <= tol
+    assert np.abs((np.hypot((I1 - L) / R, J) - F_L)[ys == S_CAP]).max() <= tol
+    assert (I1[ys == S_CAP] >= L[ys == S_CAP]).all()
+    on_corner = ys == S_CAP_CORNER
+    np.testing.assert_allclose(I1[on_corner], L[on_corner], rtol=1e-13)
+    np.testing.assert_allclose(J[on_corner], F_L[on_corner], rtol=1e-12)
+    np.testing.assert_allclose(I1[ys == S_CORNER], 3 * p_lo, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(J[ys == S_CORNER], J_lo, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(I1[ys == S_CUTOFF], 3 * p_lo, rtol=1e-12)
+    # Normality on the smooth surfaces: (I1_tr - I1) / (9 K df/dI1) = (J_tr - J) / (G df/dJ) >= 0.
+    trial = model.trial(deps, state["stress"])
+    I1_tr, J_tr = i1_j(trial)
+    dF = model.failure(I1)[1]
+    fail = ys == S_FAILURE
+    a = (I1_tr - I1)[fail] / (9 * model.K * -dF[fail])
+    b = (J_tr - J)[fail] / model.G
+    np.testing.assert_allclose(a, b, rtol=1e-8)
+    assert (b > 0).all()
+    cap = ys == S_CAP
+    rho = np.hypot((I1 - L) / R, J)[cap]
+    a = (I1_tr - I1)[cap] / (9 * model.K * ((I1 - L)[cap] / R**2 / rho))
+    b = (J_tr - J)[cap] / (model.G * J[cap] / rho)
+    np.testing.assert_allclose(a, b, rtol=1e-7)
+    # The cap moves out only where the cap is active.
+    moved = new["cap_L"] != state["cap_L"]
+    assert (moved == cap).all() and (new["cap_L"][cap] > state["cap_L"][cap]).all()
+
+
+@pytest.mark.parametrize("model", ALL, ids=model_id)
+def test_large_increments_converge_in_one_vectorised_call(model):
+    rng = np.random.default_rng(3)
+    m = 2000
+    deps = 0.1 * rng.uniform(0, 1, (m, 1)) ** 2 * (rng.standard_normal((m, 6))
+                                                     + 0.7 * rng.standard_normal((m, 1)) * IDENTITY)
+    sigma, tangent, new = model.update(deps, model.initial_state(m, np.tile(-3 * IDENTITY, (m, 1))))
+    assert np.isfinite(sigma).all() and np.isfinite(tangent).all()
+    I1, J = i1_j(sigma)
+    assert (J - model.failure(I1)[0]).max() <= 1e-9 * np.abs(I1).max()
+    assert (new["cap_L"] >= model.initial_state(1, -3 * IDENTITY)["cap_L"][0]).all()
+
+
+def hydrostatic(model, state, d_eps_v):
+    """Hydrostatic strain steps (compression positive d_eps_v); rows of (I1, state)."""
+    rows = []
+    for d in d_eps_v:
+        sigma, _, state = model.update(np.atleast_2d(-d / 3.0 * IDENTITY), state)
+        rows.append((i1_j(sigma)[0][0], i1_j(sigma)[1][0], state))
+    return rows
+
+
+@pytest.mark.parametrize("cls, params", [(ModifiedCap, VII5), (DiMaggioSandler, DS)])
+@pytest.mark.parametrize("X0", [0.0, 20.0])
+def test_hydrostatic_loading_follows_the_hardening_law(cls, params, X0):
+    model = cls(**params, X0=X0)
+    W, D, K = model.W, model.D, model.K
+    state = model.initial_state(1)
+    assert state["cap_X"][0] == pytest.approx(X0, abs=1e-12)
+    rows = hydrostatic(model, state, np.full(40, 2.5e-3))
+    I1 = np.array([r[0] for r in rows])
+    X = np.array([r[2]["cap_X"][0] for r in rows])
+    eps_p = -np.array([r[2]["eps_p_vol"][0] for r in rows])
+    ys = np.array([r[2]["yield_state"][0] for r in rows])
+    assert max(r[1] for r in rows) < 1e-12 * I1[-1]
+    yielding = ys == S_CAP
+    assert yielding.sum() > 30 and (ys[~yielding] == S_ELASTIC).all()
+    # On the cap the hydrostatic stress is the cap position, and the plastic
+    # compaction is W (1 - exp(-D X)) - W (1 - exp(-D X0)).
+    np.testing.assert_allclose(X[yielding], I1[yielding], rtol=1e-12)
+    np.testing.assert_allclose(eps_p, W * (np.exp(-D * X0) - np.exp(-D * X)), rtol=1e-11,
+                               atol=1e-15)
+    # Total strain = elastic I1 / 3K + plastic.
+    np.testing.assert_allclose(np.cumsum(np.full(40, 2.5e-3)), I1 / (3 * K) + eps_p, rtol=1e-11)
+    if X0 == 0.0:
+        np.testing.assert_allclose(eps_p, W * (1 - np.exp(-D * I1)), rtol=1e-11)
+    else:   # elastic up to I1 = X0
+        assert (I1[~yielding] <= X0 * (1 + 1e-12)).all()
+
+
+def test_cap_stays_put_on_unloading_and_reloading_picks_up_the_law():
+    model = MODIFIED
+    W, D, K = model.W, model.D, model.K
+    rows = hydrostatic(model, model.initial_state(1), np.full(20, 4e-3))
+    X_max, I1_max = rows[-1][2]["cap_X"][0], rows[-1][0]
+    eps_p_max = -rows[-1][2]["eps_p_vol"][0]
+    assert X_max == pytest.approx(I1_max, rel=1e-12) and X_max > 60.0
+    # Unloading: elastic, the cap and the plastic strain stay.
+    down = hydrostatic(model, rows[-1][2], np.full(10, -1e-3))
+    for k, (I1, _, state) in enumerate(down, start=1):
+        assert state["yield_state"][0] == S_ELASTIC
+        assert state["cap_X"][0] == X_max and -state["eps_p_vol"][0] == eps_p_max
+        assert I1 == pytest.approx(I1_max - 3 * K * 1e-3 * k, rel=1e-12)
+    # Shear from the unloaded state inside the cap: still elastic, the cap does not move.
+    sigma, _, state = model.update(np.atleast_2d(1e-4 * unit_deviator(4)), down[-1][2])
+    assert state["yield_state"][0] == S_ELASTIC and state["cap_X"][0] == X_max
+    # Reloading: elastic until the cap, then the same hardening law.
+    up = hydrostatic(model, down[-1][2], np.full(20, 1e-3))
+    I1 = np.array([r[0] for r in up])
+    ys = np.array([r[2]["yield_state"][0] for r in up])
+    X = np.array([r[2]["cap_X"][0] for r in up])
+    eps_p = -np.array([r[2]["eps_p_vol"][0] for r in up])
+    assert (ys[I1 <= X_max] == S_ELASTIC).all() and (ys[I1 > X_max * (1 + 1e-12)] == S_CAP).all()
+    assert (ys == S_CAP).sum() > 5
+    np.testing.assert_allclose(eps_p, W * (np.exp(-D * 20.0) - np.exp(-D * X)), rtol=1e-11)
+    assert (np.diff(X) >= 0).all()
+
+
+def test_dilatancy_on_the_failure_surface_does_not_soften_the_cap():
+    # Shear at constant volume: the stress climbs the failure surface (dilating)
+    # to the corner with the cap, which does not move (its normal is deviatoric there).
+    model = MODIFIED
+    state = model.initial_state(1, -3.0 * IDENTITY)
+    L0 = state["cap_L"][0]
+    n = unit_deviator(5)
+    codes = []
+    for _ in range(10):
+        _, _, state = model.update(np.atleast_2d(2e-3 * n), state)
+        codes.append(state["yield_state"][0])
+        assert state["cap_L"][0] == L0
+    assert codes[0] == S_FAILURE and codes[-1] == S_CAP_CORNER
+    assert state["eps_p_vol"][0] > 1e-4                 # dilation (tension positive)
+
+
+@pytest.mark.parametrize("model", [MODIFIED, SANDLER], ids=model_id)
+def test_triaxial_compression_strength(model):
+    # Conventional triaxial compression from p0 = 1 psi, inside the cap X0 = 20: the
+    # stress path I1 = 3 p0 + q, sqrt(J2) = q / sqrt3 meets the failure surface,
+    # q / sqrt3 = F(3 p0 + q), below the cap (I1 < L), and stays there.
+    p0 = 1.0
+    state = model.initial_state(1, -p0 * IDENTITY)
+    lateral = np.full(2, 0.35 * 1e-4)
+    for d in np.full(40, -1e-4):
+        deps = np.zeros((1, 6))
+        deps[0, 2] = d
+        deps[0, :2] = lateral           # the last step's lateral strains
+        for _ in range(30):
+            sigma, tangent, new = model.update(deps, state)
+            r = sigma[0, :2] + p0
+            if np.abs(r).max() <= 1e-12 * p0:
+                break
+            deps[0, :2] -= np.linalg.solve(tangent[0][:2, :2], r)
+        else:
+            pytest.fail("lateral stress iteration did not converge")
+        state, lateral = new, deps[0, :2]
+    I1, J = i1_j(sigma)
+    q = math.sqrt(3.0) * J[0]
+    assert I1[0] == pytest.approx(3 * p0 + q, rel=1e-10)
+    F = lambda q: model.failure(np.array(3 * p0 + q))[0] - q / math.sqrt(3.0)  # noqa: E731
+    lo, hi = 0.0, 100.0
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if F(mid) > 0 else (lo, mid)
+    assert q == pytest.approx(lo, rel=1e-10)
+    assert state["yield_state"][0] == S_FAILURE and I1[0] < state["cap_L"][0]
+
+
+def test_section_vii5_failure_surface():
+    # The modified cap: through the origin (c = 0), initial slope B + C beta, and the
+    # Drucker–Prager line sqrt(J2) = A + B I1 at high pressure.
+    F, dF, _ = MODIFIED.failure(np.array([0.0, 1e3]))
+    assert F[0] == 0.0 and dF[0] == pytest.approx(0.11 + 5.6 * 0.062, rel=1e-14)
+    assert F[1] == pytest.approx(5.6 + 0.11 * 1e3, rel=1e-14) and dF[1] == pytest.approx(0.11)
+    assert MODIFIED.apex == 0.0 and SANDLER.apex == 0.0
+    assert SANDLER.failure(np.array(1e3))[0] == pytest.approx(5.6)   # the von Mises plateau
+    # B = 0 is DiMaggio–Sandler.
+    rng = np.random.default_rng(6)
+    deps = 5e-3 * rng.standard_normal((50, 6))
+    zero_b = ModifiedCap(**{**VII5, "B": 0.0}, X0=20.0)
+    a = zero_b.update(deps, zero_b.initial_state(50, -3 * IDENTITY))
+    b = SANDLER.update(deps, SANDLER.initial_state(50, -3 * IDENTITY))
+    np.testing.assert_allclose(a[0], b[0], rtol=1e-12, atol=1e-12)
+
+
+def test_initial_cap_passes_through_the_initial_stress():
+    n = unit_deviator(7)
+    stress = np.array([-3.0 * IDENTITY, -10.0 * IDENTITY, -10.0 * IDENTITY + SQRT2 * 2.0 * n,
+                       np.zeros(6)])
+    state = MODIFIED.initial_state(4, stress)
+    I1, J = i1_j(stress)
+    L, X = state["cap_L"], state["cap_X"]
+    assert X[0] == pytest.approx(20.0) and X[3] == pytest.approx(20.0)
+    assert X[1] == pytest.approx(30.0, rel=1e-12)
+    F_L = MODIFIED.failure(L)[0]
+    assert np.hypot((I1[2] - L[2]) / MODIFIED.R, J[2]) == pytest.approx(F_L[2], rel=1e-12)
+    np.testing.assert_allclose(X, L + MODIFIED.R * F_L, rtol=1e-14)
+    # The initial stress is then elastic.
+    _, _, new = MODIFIED.update(np.zeros((4, 6)), state)
+    np.testing.assert_array_equal(new["yield_state"], S_ELASTIC)
+
+
+@pytest.mark.parametrize("model", ALL, ids=model_id)
+def test_update_does_not_mutate_inputs(model):
+    deps, stress, _ = mode_points(model)
+    state = model.initial_state(len(deps), stress)
+    before = {k: v.copy() for k, v in state.items()}
+    _, _, new = model.update(deps, state)
+    assert state.keys() == new.keys() == model.history.keys()
+    for name, shape in model.history.items():
+        np.testing.assert_array_equal(state[name], before[name])
+        assert new[name].shape == (len(deps),) + shape
+        assert not np.shares_memory(new[name], state[name])
+
+
+def test_registry_builds_the_caps():
+    assert from_table(MODELS["modified_cap"], {**VII5, "X0": 20}, "m") == MODIFIED
+    assert from_table(MODELS["dimaggio_sandler"], {**DS, "X0": 20.0}, "m") == SANDLER
+    model = from_table(MODELS["modified_cap"], VII5, "m")
+    assert model.X0 == 0.0 and model.tension_cutoff == math.inf
+    assert dataclasses.replace(model, X0=20.0) == MODIFIED
+
+
+@pytest.mark.parametrize("name, key, value", [
+    ("modified_cap", "A", 0.0), ("modified_cap", "B", -0.1), ("modified_cap", "C", 0.0),
+    ("modified_cap", "beta", -1.0), ("modified_cap", "R", 0.0), ("modified_cap", "W", 0.0),
+    ("modified_cap", "D", 0.0), ("modified_cap", "X0", -1.0),
+    ("modified_cap", "tension_cutoff", -1.0), ("dimaggio_sandler", "A", -5.6),
+    ("dimaggio_sandler", "R", -2.0), ("dimaggio_sandler", "nu", 0.5),
+])
+def test_invalid_parameters_name_the_parameter(name, key, value):
+    table = dict(VII5 if name == "modified_cap" else DS)
+    with pytest.raises(InputError, match=rf"materials\.soil\.{key}\b"):
+        from_table(MODELS[name], {**table, key: value}, "materials.soil")
