@@ -234,3 +234,19 @@ def test_path_targets_are_linear_in_the_leg():
     assert list(shear.stress_controlled) == [True, True, False, False, False, False]
     assert target[:2] == pytest.approx([-10.0, -10.0])      # lateral stress held
     assert target[2] == pytest.approx(-1e-3 - 0.01)         # half the axial strain
+
+
+@pytest.mark.parametrize("path, settings", [
+    ("hydrostatic", ["path.pressure=30", "path.unload=true"]),
+    ("triaxial-compression", ["path.confining=10"]),
+    ("triaxial-extension", ["path.confining=10"]),
+    ("simple-shear", ["path.confining=10"])])
+def test_appendix_c_paths_of_the_modified_cap_run(tmp_path, path, settings):
+    """Appendix C (cubical device): the modified cap with the VII.5 parameters on each path."""
+    from soilbin.cli import main
+    args = ["point", "modified_cap", path, "--out", str(tmp_path), "--json"]
+    for s in ["E=4000", "nu=0.35", "A=5.65", "B=0.11", "C=5.6", "beta=0.062", "R=2", "W=0.18",
+              "D=0.05", *settings]:
+        args += ["--set", s]
+    assert main(args) == 0
+    assert (tmp_path / "path.png").exists()

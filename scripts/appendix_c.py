@@ -1,0 +1,71 @@
+"""Appendix C: the cubical-device tests of the modified cap (hydrostatic, CTC, CTE,
+simple shear) driven at one material point with the section VII.5 parameters.
+
+Runs `soilbin point modified_cap PATH` for the four paths (confining 10 psi)
+and draws their stress paths and stress-strain curves on one PNG
+(runs/appendix-c/appendix-c.png); each run folder keeps its own CSV and PNG.
+"""
+import csv
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+SOILBIN = Path(sys.executable).with_name("soilbin")
+OUT = ROOT / "runs" / "appendix-c"
+# VII.5 with A = 5.65 psi (a trace of strength at zero pressure, as in the container scene)
+PARAMETERS = dict(E=4000.0, nu=0.35, A=5.65, B=0.11, C=5.6, beta=0.062, R=2.0, W=0.18, D=0.05)
+TESTS = {
+    "hydrostatic": ["path.pressure=30", "path.unload=true"],
+    "triaxial-compression": ["path.confining=10"],
+    "triaxial-extension": ["path.confining=10"],
+    "simple-shear": ["path.confining=10"],
+}
+
+
+def run(path, settings):
+    sets = [f"{k}={v}" for k, v in PARAMETERS.items()] + settings
+    cmd = [SOILBIN, "point", "modified_cap", path, "--out", OUT / path]
+    for s in sets:
+        cmd += ["--set", s]
+    done = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    if done.returncode != 0:
+        sys.exit(f"{path}: {done.stderr.strip()}")
+    with open(OUT / path / "path.csv") as f:
+        return [{k: float(v) for k, v in row.items() if k != "leg"} for row in csv.DictReader(f)]
+
+
+def main():
+    fig, (paths, curves) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for name, settings in TESTS.items():
+        rows = run(name, settings)
+        paths.plot([r["p"] for r in rows], [r["q"] for r in rows], ".-", ms=2, label=name)
+        if name == "hydrostatic":
+            curves.plot([r["eps_v"] for r in rows], [r["p"] for r in rows], ".-", ms=2,
+                        label="hydrostatic: p against eps_v")
+        elif name == "simple-shear":
+            curves.plot([r["gamma"] for r in rows], [r["tau"] for r in rows], ".-", ms=2,
+                        label="simple shear: tau against gamma")
+        else:
+            curves.plot([r["eps_axial"] for r in rows], [r["q"] for r in rows], ".-", ms=2,
+                        label=f"{name}: q against eps_axial")
+    paths.set_xlabel("p [psi] (compression +)")
+    paths.set_ylabel("q [psi] (negative in extension)")
+    curves.set_xlabel("strain (compression +)")
+    curves.set_ylabel("stress [psi]")
+    for ax in (paths, curves):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("Appendix C tests, modified cap (VII.5 parameters)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(OUT / "appendix-c.png", dpi=120)
+    print(OUT / "appendix-c.png")
+
+
+if __name__ == "__main__":
+    main()
