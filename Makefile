@@ -4,13 +4,12 @@ VENV    := .venv
 PY      := $(VENV)/bin/python
 STAMP   := $(VENV)/.soilbin-installed
 SCENE   ?= scenes/tine-2in-90deg.toml
-OUT     ?= runs
 export OMP_NUM_THREADS := 1
 
 .PHONY: run test bench setup system clean
 
 run: setup
-	$(VENV)/bin/soilbin run $(SCENE) --out $(OUT)
+	$(VENV)/bin/soilbin run $(SCENE)
 
 test: setup
 	$(PY) -m pytest -q tests
