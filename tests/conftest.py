@@ -4,6 +4,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -63,3 +64,14 @@ def solve_file():
                 for r in result.steps]
         return result, rows, problem
     return _solve
+
+
+def central_differences(model, deps, state, h):
+    """dσ/dΔε (n, 6, 6) of a model by central differences of its update, column by column."""
+    fd = np.empty((len(deps), 6, 6))
+    for j in range(6):
+        step = np.zeros(6)
+        step[j] = h
+        fd[:, :, j] = (model.update(deps + step, state)[0]
+                       - model.update(deps - step, state)[0]) / (2.0 * h)
+    return fd

@@ -6,6 +6,8 @@ import math
 import numpy as np
 import pytest
 
+from conftest import central_differences
+
 from soilbin.errors import InputError, ReturnMapError
 from soilbin.models import MODELS, DruckerPrager, LinearElastic, Matching, VonMises
 from soilbin.params import from_table
@@ -91,14 +93,7 @@ def test_tangent_matches_central_differences(model):
     _, tangent, new = model.update(deps, state)
     if "yield_state" in new:
         np.testing.assert_array_equal(new["yield_state"], expected)
-    h = 1e-9   # 1e-7 of the strain scale 1e-2
-    fd = np.empty_like(tangent)
-    for j in range(6):
-        step = np.zeros(6)
-        step[j] = h
-        plus = model.update(deps + step, state)[0]
-        minus = model.update(deps - step, state)[0]
-        fd[:, :, j] = (plus - minus) / (2.0 * h)
+    fd = central_differences(model, deps, state, 1e-9)   # 1e-7 of the strain scale 1e-2
     scale = np.abs(model.stiffness).max()
     assert np.abs(fd - tangent).max() / scale < 1e-6
     np.testing.assert_allclose(tangent, np.swapaxes(tangent, 1, 2), atol=1e-12 * scale)

@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from conftest import central_differences
+
 from soilbin.errors import InputError
 from soilbin.models import MODELS, DiMaggioSandler, ModifiedCap
 from soilbin.models.cap import SECTION_VII5
@@ -73,13 +75,7 @@ def test_tangent_matches_central_differences(model):
     assert np.ptp(state["cap_X"]) == 0.0 and state["cap_X"][0] == pytest.approx(20.0, rel=1e-14)
     _, tangent, new = model.update(deps, state)
     np.testing.assert_array_equal(new["yield_state"], expected)
-    h = 1e-8
-    fd = np.empty_like(tangent)
-    for j in range(6):
-        step = np.zeros(6)
-        step[j] = h
-        fd[:, :, j] = (model.update(deps + step, state)[0]
-                       - model.update(deps - step, state)[0]) / (2.0 * h)
+    fd = central_differences(model, deps, state, 1e-8)
     error = np.abs(fd - tangent).max(axis=(1, 2)) / np.abs(model.stiffness).max()
     assert error.max() < 1e-6, dict(zip(expected, error))
 

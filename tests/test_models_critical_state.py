@@ -6,6 +6,8 @@ import math
 import numpy as np
 import pytest
 
+from conftest import central_differences
+
 from soilbin.errors import InputError, ReturnMapError
 from soilbin.models import MODELS, CamClay, CriticalStateElasticity, ModifiedCamClay
 from soilbin.models import invariant_return
@@ -59,16 +61,6 @@ def state_at(model, stress, p_c):
     state = model.initial_state(len(stress), stress)
     state["p_c"][:] = p_c
     return state
-
-
-def central_differences(model, deps, state, h):
-    fd = np.empty((len(deps), 6, 6))
-    for j in range(6):
-        step = np.zeros(6)
-        step[j] = h
-        fd[:, :, j] = (model.update(deps + step, state)[0]
-                       - model.update(deps - step, state)[0]) / (2.0 * h)
-    return fd
 
 
 @pytest.mark.parametrize("model", ALL, ids=model_id)

@@ -51,7 +51,8 @@ class RigidToolContact:
         self.nodes = np.concatenate(nodes)               # local node index per contact point
         self.areas = np.concatenate(areas)
         self.normals = np.concatenate(normals)
-        self.dofs = np.stack([component_spaces[i][1] for i in range(3)], axis=1)[self.nodes]
+        self.dofs = np.stack([component_spaces[i][1] for i in range(3)],
+                             axis=1)[self.nodes].astype(PETSc.IntType)
         self._free = ~fixed[self.dofs]                    # (n_points, 3)
         self.law = law
         # A tool wished in place carries the in-situ traction t0 = -σ0 n: the jump
@@ -102,8 +103,7 @@ class RigidToolContact:
     def add_jacobian(self, A):
         free = self._free[:, :, None] & self._free[:, None, :]
         blocks = self.areas[:, None, None] * self._tangent * free
-        A.setValuesLocalRCV(self.dofs.astype(PETSc.IntType), self.dofs.astype(PETSc.IntType),
-                            blocks, addv=PETSc.InsertMode.ADD)
+        A.setValuesLocalRCV(self.dofs, self.dofs, blocks, addv=PETSc.InsertMode.ADD)
 
     def commit(self):
         self.committed = self.trial

@@ -71,6 +71,7 @@ import math
 import numpy as np
 
 from ..params import param
+from .cone import tension_cutoff_param
 from .elastic import IsotropicElasticity
 from .invariant_return import (APEX, CAP, CAP_CORNER, CUTOFF, FAILURE, YIELD_TOL, LinearBulk,
                                Response, Trial, check_converged, invariants, scalar_root,
@@ -85,32 +86,20 @@ def _positive(doc):
     return param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True, doc=doc)
 
 
-def cap_params():
-    """The fields shared by the cap models, in the dissertation's order after A (and B)."""
-    return {
-        "C": _positive("failure surface: C of -C exp(-beta I1), stress units"),
-        "beta": _positive("failure surface: beta of exp(-beta I1), 1 / stress units"),
-        "R": _positive("cap ellipse axis ratio, (X - L) / F(L)"),
-        "W": _positive("hardening: largest plastic compaction, eps_v^p = W (1 - exp(-D X))"),
-        "D": _positive("hardening: D of eps_v^p = W (1 - exp(-D X)), 1 / stress units"),
-    }
-
-
-def tension_cutoff_param():
-    return param(math.inf, lo=0.0, hi=math.inf,
-                 doc="largest mean stress p = I1/3 the soil carries (tension positive); "
-                     "inf (the default) or beyond the failure surface's apex: no cut-off")
-
-
-def x0_param():
-    return param(0.0, lo=0.0, hi=math.inf, hi_open=True,
-                 doc="initial cap position X (compression-positive I1); moved out to pass "
-                     "through the initial stress where that lies beyond it")
-
-
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, kw_only=True)
 class CapModel(IsotropicElasticity):
-    """Base of the cap models (module doc); a subclass gives the failure function."""
+    """Base of the cap models (module doc); a subclass gives the failure function and
+    its parameters (A, and B for the modified cap)."""
+
+    C: float = _positive("failure surface: C of -C exp(-beta I1), stress units")
+    beta: float = _positive("failure surface: beta of exp(-beta I1), 1 / stress units")
+    R: float = _positive("cap ellipse axis ratio, (X - L) / F(L)")
+    W: float = _positive("hardening: largest plastic compaction, eps_v^p = W (1 - exp(-D X))")
+    D: float = _positive("hardening: D of eps_v^p = W (1 - exp(-D X)), 1 / stress units")
+    X0: float = param(0.0, lo=0.0, hi=math.inf, hi_open=True,
+                      doc="initial cap position X (compression-positive I1); moved out to pass "
+                          "through the initial stress where that lies beyond it")
+    tension_cutoff: float = tension_cutoff_param()
 
     history = {"stress": (6,), "cap_L": (), "cap_X": (), "eps_p_vol": (), "eps_p_eq": (),
                "yield_state": ()}
@@ -296,13 +285,6 @@ class DiMaggioSandler(CapModel):
     """DiMaggio–Sandler cap: F(I1) = A - C exp(-beta I1) (eq. B.9; module doc)."""
 
     A: float = _positive("failure surface: the von Mises plateau sqrt(J2) = A, stress units")
-    C: float = cap_params()["C"]
-    beta: float = cap_params()["beta"]
-    R: float = cap_params()["R"]
-    W: float = cap_params()["W"]
-    D: float = cap_params()["D"]
-    X0: float = x0_param()
-    tension_cutoff: float = tension_cutoff_param()
 
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)
@@ -319,13 +301,6 @@ class ModifiedCap(CapModel):
     B: float = param(lo=0.0, hi=math.inf, hi_open=True,
                      doc="failure surface: slope of the high-pressure Drucker–Prager line "
                          "sqrt(J2) = A + B I1")
-    C: float = cap_params()["C"]
-    beta: float = cap_params()["beta"]
-    R: float = cap_params()["R"]
-    W: float = cap_params()["W"]
-    D: float = cap_params()["D"]
-    X0: float = x0_param()
-    tension_cutoff: float = tension_cutoff_param()
 
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)
