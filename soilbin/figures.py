@@ -1,5 +1,6 @@
 """PNG figures of a run: the load–displacement curve and, with a tool, a section around it."""
 import numpy as np
+from mpi4py import MPI
 
 import matplotlib
 matplotlib.use("Agg")
@@ -20,21 +21,21 @@ def curve_png(records, scene, path):
 
 
 def tool_section_png(problem, path, depth_fraction=0.5):
-    """Horizontal section through the tool at a fraction of its depth: soil displacement
-    vectors (x-y) and the gap between soil and tool (rank 0 draws; data gathered)."""
-    u = problem.displacement_p1()
-    x = u.function_space.tabulate_dof_coordinates()
+    """Horizontal section through the tool at a fraction of its depth, on the initial
+    geometry: soil displacement vectors (x-y) and the gap between soil and tool (rank 0
+    draws; data gathered)."""
+    u = problem.displacement()
     owned = u.function_space.dofmap.index_map.size_local
-    contact = problem.contact
-    z_tool = contact.scalar_space.tabulate_dof_coordinates()[contact.nodes, 2]
-    z_section = z_tool.min() * depth_fraction
-    spacing = np.diff(np.unique(np.round(x[:owned, 2], 9))).min(initial=np.inf)
-    near = np.abs(x[:owned, 2] - z_section) <= 0.5 * spacing
-    points = contact.scalar_space.tabulate_dof_coordinates()[contact.nodes]
-    on_section = np.abs(points[:, 2] - z_section) <= 0.5 * spacing
+    displacement = u.x.array.reshape(-1, 3)[:owned]
+    x = u.function_space.tabulate_dof_coordinates()[:owned] - displacement * problem.moves_mesh
+    points, gap = problem.tool.gap()
     comm = problem.comm
-    data = comm.gather((x[:owned][near], u.x.array.reshape(-1, 3)[:owned][near],
-                        points[on_section], contact.gap()[on_section]), root=0)
+    z_section = comm.allreduce(points[:, 2].min(initial=np.inf), op=MPI.MIN) * depth_fraction
+    spacing = comm.allreduce(np.diff(np.unique(np.round(x[:, 2], 9))).min(initial=np.inf),
+                             op=MPI.MIN)
+    near = np.abs(x[:, 2] - z_section) <= 0.5 * spacing
+    on_section = np.abs(points[:, 2] - z_section) <= 0.5 * spacing
+    data = comm.gather((x[near], displacement[near], points[on_section], gap[on_section]), root=0)
     if comm.rank != 0:
         return
     xs, us, ps, gaps = (np.concatenate(parts) for parts in zip(*data))

@@ -36,10 +36,12 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None):
     folder = RunFolder(out_dir, problem, scene)
     setup_s = time.perf_counter() - start
 
+    area = problem.area   # collective: every rank, before the steps
+
     def on_step(record):
         folder.add_step(record)
         if progress is not None:
-            progress(record, problem.area)
+            progress(record, area)
 
     loading = scene.loading
     result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step)
@@ -71,6 +73,6 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None):
     folder.finish(summary)
     if records and comm.rank == 0:
         figures.curve_png(records, scene, out_dir / "curve.png")
-    if records and problem.contact is not None:
+    if records and problem.tool is not None and problem.tool.interface is not None:
         figures.tool_section_png(problem, out_dir / "tool-section.png")
     return summary

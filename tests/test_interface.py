@@ -136,7 +136,7 @@ def test_sliding_block_carries_adhesion_plus_friction(tmp_path, solve_file):
 def test_block_pulled_off_the_tool_separates(tmp_path, solve_file):
     summary, rows, problem = solve_file(block_scene(tmp_path, HELD_AT_TOP), "loading.direction=-z")
     assert all(row["force"] == 0.0 for row in rows)
-    assert np.allclose(problem.contact.gap(), 0.01)
+    assert np.allclose(problem.tool.interface.gap(), 0.01)
 
 
 @pytest.mark.parametrize("held, direction, stiffness", [(HELD_AT_WALL, "+x", 1.0e5),

@@ -32,7 +32,7 @@ def support_reaction(problem, boundaries, axis):
 
 def test_gap_opens_behind_the_pushed_tool_and_draft_is_the_supports_reaction():
     problem, last = solve()
-    contact, tagged = problem.contact, problem.tagged
+    contact, tagged = problem.tool.interface, problem.tagged
     gap = contact.gap()
     face_of_point = np.repeat([tagged.boundaries[f] for f in problem.scene.tool.faces],
                               contact.points_per_face)

@@ -55,12 +55,13 @@ class RigidToolContact:
                              axis=1)[self.nodes].astype(PETSc.IntType)
         self._free = ~fixed[self.dofs]                    # (n_points, 3)
         self.law = law
+        self.reference_points = scalar_space.tabulate_dof_coordinates()[self.nodes]  # initial mesh
         # A tool wished in place carries the in-situ traction t0 = -σ0 n: the jump
         # is offset by t0_n n / k_n + t0_t / k_s, so that the law returns t0 at zero jump.
         self._jump0 = np.zeros((len(self.nodes), 3))
         if initial_stress is not None:
-            x = scalar_space.tabulate_dof_coordinates()[self.nodes]
-            t0 = -np.einsum("pij,pj->pi", from_mandel(initial_stress(x)), self.normals)
+            t0 = -np.einsum("pij,pj->pi", from_mandel(initial_stress(self.reference_points)),
+                            self.normals)
             t0_n = np.einsum("pi,pi->p", t0, self.normals)[:, None] * self.normals
             self._jump0 = t0_n / law.k_n + (t0 - t0_n) / law.k_s
         self.committed = law.initial_state(len(self.nodes))

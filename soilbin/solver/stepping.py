@@ -9,8 +9,33 @@ that stops early leaves all its converged steps behind.
 """
 import dataclasses
 import time
+from typing import Protocol, Sequence
 
 from ..errors import ConvergenceError
+
+
+class SolveResult(Protocol):
+    iterations: int
+    residuals: Sequence[float]
+
+
+class SteppedProblem(Protocol):
+    """What the load stepper drives (``problem.SoilProblem``, or a stand-in in tests)."""
+
+    def set_load_factor(self, factor: float) -> None:
+        """Load (or prescribed displacement) at this factor of the scene's magnitude."""
+
+    def solve(self) -> SolveResult:
+        """Equilibrium from the last committed state; raises ConvergenceError on failure."""
+
+    def commit(self) -> None:
+        """The converged state becomes the start of the next step."""
+
+    def roll_back(self) -> None:
+        """Back to the last committed state after a failed solve."""
+
+    def observe(self) -> tuple[float, float]:
+        """(displacement, force) along the loading direction at the committed state."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -32,8 +57,8 @@ class StepperResult:
     message: str            # why it stopped early ('' when complete)
 
 
-def run_load_steps(problem, steps, max_cuts, on_step, clock=time.perf_counter):
-    """Drive ``problem`` (set_load_factor / solve / commit / roll_back / observe) to factor 1."""
+def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter):
+    """Drive ``problem`` to load factor 1."""
     nominal = 1.0 / steps
     level, factor, cuts = 0, 0.0, 0      # increment = nominal / 2**level
     records, start = [], clock()

@@ -1,0 +1,4 @@
+"""The finite element problem of a scene and its parts (see ``core``)."""
+from .core import SoilProblem
+
+__all__ = ["SoilProblem"]

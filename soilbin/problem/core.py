@@ -1,0 +1,133 @@
+"""The discrete problem of a scene: the parts wired together, driven by the load stepper.
+
+:class:`SoilProblem` implements :class:`~soilbin.solver.stepping.SteppedProblem`:
+set a load factor, solve for equilibrium with Newton, commit or roll back,
+observe the driven boundary or tool. Each physical thing is a part in its own
+module: the frame (``frame``), the kinematics (``kinematics``: small strain
+or updated Lagrangian), the material points (``solver.quadrature``), the
+loads (``loads``: supports, the driven boundary, dead loads, gravity, the
+in-situ state) and the tool (``tool``). Outputs read named fields
+(:meth:`SoilProblem.output_fields`), not the parts.
+"""
+import ufl
+from dolfinx import fem
+
+from ..forms.discretisation import Discretisation
+from ..scene import TOOL
+from ..solver.newton import NewtonSolver
+from ..solver.quadrature import MaterialPoints
+from . import fields
+from .frame import Frame
+from .kinematics import kinematics_of
+from .loads import BoundaryLoad, Supports, dead_loads, start_mean_pressure, vector_norm
+from .tool import RigidTool
+
+
+class SoilProblem:
+    def __init__(self, scene, tagged_mesh):
+        self.scene, self.tagged = scene, tagged_mesh
+        mesh = tagged_mesh.mesh
+        self.comm = mesh.comm
+        self.frame = frame = Frame(scene.analysis.frame_rotation)
+        frame.turn_mesh(mesh)
+        self.disc = disc = Discretisation.create(mesh, scene.analysis.element)
+        self.w = fem.Function(disc.space, name="solution")
+        self.w_committed = fem.Function(disc.space)
+        self.kinematics = kinematics_of(scene.analysis, disc, self.w, self.w_committed)
+        self.points = self._material_points()
+        if scene.geostatic is not None and disc.element.mixed:
+            start_mean_pressure(disc, self.points, self.w, self.w_committed)
+
+        v = ufl.TestFunction(disc.space)
+        self.supports = Supports(scene, tagged_mesh, disc, frame)
+        self.tool = (RigidTool(scene, tagged_mesh, disc, frame, self.kinematics, self.w, v,
+                               self.supports) if scene.tool is not None else None)
+        self.drive = (self.tool if scene.loading.boundary == TOOL else
+                      BoundaryLoad(scene, tagged_mesh, disc, frame, self.kinematics, self.supports,
+                                   self.w, v))
+        self.bcs = self.supports.bcs + (self.tool.bcs if self.tool else [])
+        self.newton = self._newton(v)
+
+    def _material_points(self):
+        scene, tagged = self.scene, self.tagged
+        region_cells = {name: tagged.cell_tags.find(tagged.regions[name]) for name in scene.regions}
+        models = {name: scene.materials[material] for name, material in scene.regions.items()}
+        geostatic = scene.geostatic
+        return MaterialPoints(self.disc, self.w, self.w_committed,
+                              self.kinematics.strain_increment(), region_cells, models,
+                              keep_strain=self.kinematics.keeps_strain,
+                              initial_stress=geostatic and geostatic.stress)
+
+    def _newton(self, v):
+        """Residual = internal − dead loads − the driven traction (+ the tool's nodal terms)."""
+        internal = self.kinematics.internal_force(self.points, v)
+        dead = dead_loads(self.scene, self.tagged, self.disc, self.frame, self.kinematics, v)
+        soil_residual = internal if dead is None else internal - dead
+        driven = getattr(self.drive, "external", None)
+        residual = soil_residual if driven is None else soil_residual - driven
+        if self.tool is not None:
+            self.tool.measure_with(soil_residual)
+        if self.drive is not self.tool:
+            self.drive.measure_with(internal)
+        jacobian = self.kinematics.jacobian(residual, self.points,
+                                            ufl.TrialFunction(self.disc.space), v)
+        newton = NewtonSolver(self.comm, residual, jacobian, self.w, self.bcs,
+                              self.update_material_state, self.scene.solver,
+                              nodal_terms=self.tool.nodal_terms if self.tool else [])
+        if dead is not None:   # loads present from the start set the force scale
+            newton.include_force_scale(vector_norm(dead))
+        return newton
+
+    @property
+    def n_dofs(self):
+        imap = self.disc.space.dofmap.index_map
+        return imap.size_global * self.disc.space.dofmap.index_map_bs
+
+    @property
+    def mesh(self):
+        return self.disc.mesh
+
+    @property
+    def moves_mesh(self):
+        return self.kinematics.moves_mesh
+
+    @property
+    def area(self):
+        """Area of the driven boundary (current configuration); collective."""
+        return self.drive.area
+
+    def update_material_state(self):
+        """The constitutive and interface updates of one Newton iterate."""
+        self.points.update()
+        if self.tool is not None:
+            self.tool.update()
+
+    # -- the load stepper's protocol -------------------------------------------------
+    def set_load_factor(self, factor):
+        self.drive.set_factor(factor)
+
+    def solve(self):
+        """Equilibrium at the current load factor, starting from the last committed state."""
+        return self.newton.solve()
+
+    def commit(self):
+        self.drive.commit()
+        if self.tool is not None and self.tool is not self.drive:
+            self.tool.commit()
+        self.kinematics.commit(self.points)
+
+    def roll_back(self):
+        self.w.x.array[:] = self.w_committed.x.array
+
+    def observe(self):
+        """(displacement, force) of the driven boundary or tool along the loading direction."""
+        return self.drive.observe()
+
+    # -- outputs ----------------------------------------------------------------------
+    def displacement(self):
+        """The total displacement as a P1 Function (nodal values)."""
+        return self.kinematics.displacement_p1()
+
+    def output_fields(self, names):
+        """Named output fields: name -> (Function, update)."""
+        return fields.build(self, names)

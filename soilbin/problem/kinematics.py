@@ -1,0 +1,141 @@
+"""Kinematics of the soil: small strain, or updated Lagrangian (chapter II).
+
+A kinematics object says what the unknown ``w`` holds (the total
+displacement, or the increment since the last converged configuration),
+which strain increment the models integrate, how the internal force and its
+Jacobian are formed, how a traction acting per unit deformed area scales,
+and what a converged step does (commit the history, move the mesh).
+Small strain builds none of the updated Lagrangian machinery.
+"""
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from ..forms import updated_lagrangian, virtual_work
+from ..tensors import ufl_mandel
+
+
+class SmallStrain:
+    """w holds the total displacement; the models integrate ε̄(w) − ε̄(w_n)."""
+    incremental = False
+    moves_mesh = False
+    keeps_strain = False   # the forms read σ and C_tan only
+
+    def __init__(self, disc, w, w_committed):
+        self._disc, self._w, self._w_committed = disc, w, w_committed
+        self._p1 = None
+
+    def strain_increment(self):
+        return (ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w))
+                - ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w_committed)))
+
+    def internal_force(self, points, v):
+        return virtual_work.internal_force(self._disc, points.stress, self._w, v)
+
+    def jacobian(self, residual, points, dw, v):
+        return virtual_work.material_stiffness(self._disc, points.tangent, dw, v)
+
+    def area_stretch(self):
+        """da/dA of a loaded facet: 1 in small strain."""
+        return 1.0
+
+    def commit(self, points):
+        points.commit()
+        self._w_committed.x.array[:] = self._w.x.array
+
+    def total_displacement(self):
+        """The displacement from the initial configuration (UFL)."""
+        return self._disc.displacement(self._w)
+
+    def displacement_p1(self):
+        """The total displacement as a P1 Function (for output)."""
+        if self._p1 is None:
+            self._p1 = fem.Function(fem.VectorFunctionSpace(self._disc.mesh, ("Lagrange", 1)),
+                                    name="displacement")
+        self._p1.interpolate(self._w.sub(0).collapse() if self._disc.element.mixed else self._w)
+        return self._p1
+
+
+class UpdatedLagrangian:
+    """w holds the increment from the last converged configuration Ω_n, which the mesh
+    follows (``forms.updated_lagrangian``: Hughes–Winget objective update, eq. 2.64–2.66)."""
+    incremental = True
+    moves_mesh = True
+    keeps_strain = True    # the linearised stress needs the increment at the points
+
+    def __init__(self, disc, w, w_committed):
+        self._disc, self._w, self._w_committed = disc, w, w_committed
+        self._motion = MeshMotion(disc, w)
+        self._rotation = None
+
+    def strain_increment(self):
+        return ufl_mandel(updated_lagrangian.model_strain(self._disc, self._w))
+
+    def internal_force(self, points, v):
+        return updated_lagrangian.internal_force(self._disc, points, self._w, v)
+
+    def jacobian(self, residual, points, dw, v):
+        """The Gateaux derivative of the residual: material, initial-stress and rotation terms."""
+        return ufl.derivative(residual, self._w, dw)
+
+    def area_stretch(self):
+        """da/dA of a loaded facet (Nanson): tractions act per unit deformed area."""
+        F = updated_lagrangian.kinematics(self._disc, self._w)[0]
+        return updated_lagrangian.surface_stretch(F, ufl.FacetNormal(self._disc.mesh))
+
+    def commit(self, points):
+        """Rotate the history, move the mesh, start the next increment from zero."""
+        if self._rotation is None:
+            self._rotation = points.expression(updated_lagrangian.rotation(self._disc, self._w))
+        points.commit(points.evaluate(self._rotation).reshape(-1, 3, 3))
+        self._motion.advance()
+        self._w_committed.x.array[:] = self._w.x.array
+        points.update()   # the committed state: σ_{n+1} on the moved mesh
+
+    def total_displacement(self):
+        return self._motion.total
+
+    def displacement_p1(self):
+        return self._motion.total
+
+
+def kinematics_of(analysis, disc, w, w_committed):
+    """The kinematics a scene's analysis options ask for."""
+    kind = UpdatedLagrangian if analysis.large_deformation else SmallStrain
+    return kind(disc, w, w_committed)
+
+
+class MeshMotion:
+    """Moves the mesh by the converged increment and accumulates the total displacement.
+
+    The increment is interpolated onto the trilinear geometry (exact for
+    hex8; at the vertices for hex27). The dilatation increment of
+    mean-dilatation elements starts each step from zero; the pressure is
+    total and carries over.
+    """
+
+    def __init__(self, disc, w):
+        mesh = disc.mesh
+        self._w, self._disc = w, disc
+        V1 = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+        self.total = fem.Function(V1, name="displacement")
+        self._increment = fem.Function(V1)
+        cells = mesh.topology.index_map(3)
+        n_cells = cells.size_local + cells.num_ghosts
+        self._nodes = mesh.geometry.dofmap.array.reshape(n_cells, -1).ravel()
+        self._dofs = V1.dofmap.list.array.reshape(n_cells, -1).ravel()
+        self._x = mesh.geometry.x
+        if disc.element.mixed:
+            _, self._reset = disc.space.sub(0).collapse()
+            _, dilatation = disc.space.sub(1).collapse()
+            self._reset = np.concatenate([self._reset, dilatation])
+        else:
+            self._reset = slice(None)
+
+    def advance(self):
+        source = self._w.sub(0).collapse() if self._disc.element.mixed else self._w
+        self._increment.interpolate(source)
+        du = self._increment.x.array.reshape(-1, 3)
+        self._x[self._nodes, :3] = self._x[self._nodes, :3] + du[self._dofs]
+        self.total.x.array[:] += self._increment.x.array
+        self._w.x.array[self._reset] = 0.0

@@ -1,0 +1,185 @@
+"""The loads on the soil: supports, the driven boundary, dead tractions, gravity, in-situ stress.
+
+A boundary driven by the load factor (``loading.boundary`` a facet group)
+is a :class:`BoundaryLoad`: a traction under force control, a prescribed
+displacement under displacement control. Its observables are the mean
+displacement of the boundary and the force on it, both along the loading
+direction: the force is the internal force of the soil on the boundary's
+dofs (the reaction under displacement control, the applied load at
+equilibrium under force control).
+"""
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+from dolfinx import fem
+import dolfinx.fem.petsc  # noqa: F401
+
+from ..errors import InputError
+from ..scene import TOOL, Control
+from ..tensors import ufl_from_mandel
+
+
+def facets(tagged, name):
+    return tagged.facet_tags.find(tagged.boundaries[name])
+
+
+def probe(disc, tagged, boundaries, vector):
+    """A function of the unknown's space equal to ``vector`` on the displacement dofs of the
+    named boundaries and zero elsewhere: the virtual displacement that reads a resultant."""
+    V, tdim = disc.displacement_space, disc.mesh.topology.dim
+    field = fem.Function(disc.space)
+    for i in np.flatnonzero(vector):
+        for name in boundaries:
+            dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
+            field.x.array[dofs] = vector[i]
+    field.x.scatter_forward()
+    return field
+
+
+def traction(disc, kinematics, magnitude, vector, measure, v):
+    """External virtual work of a traction of fixed direction, per unit deformed area."""
+    return (magnitude * ufl.dot(ufl.as_vector(vector), disc.displacement(v))
+            * kinematics.area_stretch() * measure)
+
+
+class Supports:
+    """Dirichlet conditions: supports, plane strain, and under displacement control the driven
+    boundary, whose prescribed values :meth:`move` sets. Components are the scene's own axes;
+    in a rotated frame a boundary must be held in all three."""
+
+    def __init__(self, scene, tagged, disc, frame):
+        mesh, V = disc.mesh, disc.displacement_space
+        tdim = mesh.topology.dim
+        self._moving = []   # (Constant, coefficient of the prescribed displacement)
+        self.bcs = []
+        for boundary, axes in self._constraints(scene).items():
+            if len(axes) < 3 and frame.rotated:
+                raise InputError(f"analysis.frame_rotation: boundary {boundary!r} must be held in "
+                                 f"all of x, y, z in a rotated frame (it holds {len(axes)})")
+            local = np.array([axes.get(a, 0.0) for a in range(3)])
+            components = range(3) if len(axes) == 3 else axes
+            for i in components:
+                coefficient = frame.vector(local)[i] if len(axes) == 3 else local[i]
+                dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, boundary))
+                value = fem.Constant(mesh, PETSc.ScalarType(0.0))
+                if coefficient != 0.0:
+                    self._moving.append((value, coefficient))
+                self.bcs.append(fem.dirichletbc(value, dofs, V.sub(i)))
+        if scene.analysis.plane_strain:   # the dofs of every cell
+            cells = mesh.topology.index_map(tdim)
+            all_cells = np.arange(cells.size_local + cells.num_ghosts, dtype=np.int32)
+            dofs = fem.locate_dofs_topological(V.sub(1), tdim, all_cells)
+            self.bcs.append(fem.dirichletbc(PETSc.ScalarType(0.0), dofs, V.sub(1)))
+
+    @staticmethod
+    def _constraints(scene):
+        """Boundary -> {axis: coefficient of the prescribed displacement (0: a support)}."""
+        constraints = {}
+        for support in scene.supports:
+            for axis in support.fix:
+                constraints.setdefault(support.boundary, {})["xyz".index(axis)] = 0.0
+        loading = scene.loading
+        if loading.control is Control.DISPLACEMENT and loading.boundary != TOOL:
+            axis = loading.direction.axis
+            constraints.setdefault(loading.boundary, {})[axis] = loading.direction.vector[axis]
+        return constraints
+
+    def move(self, amount):
+        """Prescribe ``amount`` of displacement along the loading direction on the driven boundary."""
+        for value, coefficient in self._moving:
+            value.value = amount * coefficient
+
+
+def dead_loads(scene, tagged, disc, frame, kinematics, v):
+    """External virtual work present from the first step: dead tractions and gravity
+    (−γ e_z per volume of the step's configuration), or None."""
+    ds = ufl.Measure("ds", domain=disc.mesh, subdomain_data=tagged.facet_tags)
+    form = None
+    for dead in scene.tractions:
+        term = traction(disc, kinematics, dead.magnitude, frame.vector(dead.direction),
+                        ds(tagged.boundaries[dead.boundary]), v)
+        form = term if form is None else form + term
+    if scene.geostatic is not None:
+        gravity = -scene.geostatic.unit_weight * disc.displacement(v)[2] * disc.measure()
+        form = gravity if form is None else form + gravity
+    return form
+
+
+class BoundaryLoad:
+    """A facet group driven by the load factor: a traction (force control) or a displacement
+    (displacement control, through the supports' prescribed values)."""
+
+    def __init__(self, scene, tagged, disc, frame, kinematics, supports, w, v):
+        loading = scene.loading
+        mesh = disc.mesh
+        self._control, self._magnitude = loading.control, loading.magnitude
+        self._supports, self._kinematics = supports, kinematics
+        self.direction = frame.vector(loading.direction)
+        ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.facet_tags)
+        self._ds = ds(tagged.boundaries[loading.boundary])
+        self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))
+        self.external = (traction(disc, kinematics, self._load, self.direction, self._ds, v)
+                         if loading.control is Control.FORCE else None)
+        self._probe = probe(disc, tagged, (loading.boundary,), self.direction)
+        self._v, self._force = v, None
+        self._area = area_of(mesh, self._ds)
+        self._displacement = fem.form(
+            ufl.dot(ufl.as_vector(self.direction), kinematics.total_displacement()) * self._ds)
+        self._factor = self._committed_factor = 0.0
+
+    def measure_with(self, internal):
+        """Read the force on the boundary as the internal force on its dofs."""
+        self._force = fem.form(ufl.replace(internal, {self._v: self._probe}))
+
+    def set_factor(self, factor):
+        self._factor = factor
+        self._load.value = factor * self._magnitude
+        if self._control is Control.DISPLACEMENT:   # the unknown may hold the increment
+            base = self._committed_factor if self._kinematics.incremental else 0.0
+            self._supports.move((factor - base) * self._magnitude)
+
+    def commit(self):
+        self._committed_factor = self._factor
+
+    @property
+    def area(self):
+        """Area of the loaded boundary (current configuration); collective."""
+        return assemble_total(self._area)
+
+    def observe(self):
+        """(mean displacement, force) along the loading direction; collective."""
+        return assemble_total(self._displacement) / self.area, assemble_total(self._force)
+
+
+def assemble_total(form):
+    """A scalar form assembled and summed over the ranks; collective."""
+    comm = form.mesh.comm
+    return comm.allreduce(fem.assemble_scalar(form), op=MPI.SUM)
+
+
+def area_of(mesh, measure):
+    """The (collective) area integral of a facet measure, as a compiled form."""
+    return fem.form(fem.Constant(mesh, PETSc.ScalarType(1.0)) * measure)
+
+
+def vector_norm(linear_form):
+    """Euclidean norm of an assembled linear form (e.g. of the dead loads: a force scale)."""
+    b = fem.petsc.assemble_vector(fem.form(linear_form))
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    norm = b.norm()
+    b.destroy()
+    return norm
+
+
+def start_mean_pressure(disc, points, w, w_committed):
+    """Mean-dilatation elements: start the pressure field at the projection of the initial
+    mean stress, so that the in-situ state is in equilibrium."""
+    P, to_parent = disc.space.sub(2).collapse()
+    p, q = ufl.TrialFunction(P), ufl.TestFunction(P)
+    mean_stress = ufl.tr(ufl_from_mandel(points.stress)) / 3.0
+    dx = disc.measure()
+    projection = fem.petsc.LinearProblem(p * q * dx, mean_stress * q * dx, petsc_options={
+        "ksp_type": "preonly", "pc_type": "lu"}).solve()
+    w.x.array[to_parent] = projection.x.array
+    w_committed.x.array[:] = w.x.array
