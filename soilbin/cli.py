@@ -54,6 +54,8 @@ def _parser():
     sub.add_parser("list", help="list the scenes in scenes/ with their titles",
                    description="List the scenes shipped in the project's scenes/ folder.")
     _point_parser(sub)
+    from .study import add_parser as add_study_parser
+    add_study_parser(sub)
     return parser
 
 
@@ -135,7 +137,8 @@ def _run(args):
     scene = load_scene(_scene_path(args.scene), args.overrides)
     out = args.out or Path("runs") / scene.name
     rank0 = MPI.COMM_WORLD.rank == 0
-    summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress)
+    summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress,
+                        overrides=args.overrides)
     if rank0:
         if args.json:
             print(json.dumps(summary))
@@ -179,11 +182,16 @@ def _point(args):
     return 0 if summary["converged"] else 1
 
 
+def _study(args):
+    from .study import study_command
+    return study_command(args)
+
+
 def main(argv=None):
     args = _parser().parse_args(argv)
-    if args.command == "point":   # NumPy only: no DOLFINx to import
+    if args.command in ("point", "study"):   # no DOLFINx to set up in this process
         try:
-            return _point(args)
+            return _point(args) if args.command == "point" else _study(args)
         except SoilbinError as err:
             print(f"soilbin: error: {err}", file=sys.stderr)
             return 2

@@ -27,8 +27,9 @@ def headline_results(scene, records, area):
     return {key: read[result.of]() / result.divide_by for key, result in scene.headline.items()}
 
 
-def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None):
-    """Solve ``scene``, writing into ``out_dir``; returns the summary dict."""
+def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
+    """Solve ``scene``, writing into ``out_dir``; returns the summary dict (``overrides``:
+    the --set items the scene was loaded with, echoed in it)."""
     start = time.perf_counter()
     out_dir = Path(out_dir)
     tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
@@ -56,6 +57,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None):
         "scene": scene.name,
         "title": scene.title,
         "units": scene.units,
+        "overrides": list(overrides),
         "status": status,
         "converged": status != "failed",
         "message": result.message,
