@@ -9,12 +9,14 @@ wide blade), and the crescent terms only by symmetry and linearity.
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from soilbin.closed_form import MODEL, chapter_viii_cases, chapter_viii_table, narrow_tine_draft
 
 rad = math.radians
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def coulomb_kp(phi, delta, theta):
@@ -126,3 +128,35 @@ def test_closed_form_imports_no_finite_element_stack():
             "print(sorted(m for m in ('dolfinx', 'gmsh', 'petsc4py', 'matplotlib', 'ufl') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_each_tool_scene_gets_the_estimate_of_its_modelled_span():
+    """run.draft_estimate: the scene's geometry, soil (phi, c), gravity and interface (delta,
+    c_a); the mesh is the tool's span against a frictionless plane, so one crescent. The
+    embedded half model carries half of the whole tool with both crescents."""
+    from soilbin.run import draft_estimate
+    from soilbin.scene import load_scene
+
+    scene = ROOT / "scenes" / "tine-2in-90deg.toml"
+    wall = draft_estimate(load_scene(scene))
+    assert wall == narrow_tine_draft(2.0, 6.0, 90.0, phi=33.0, delta=22.0, gamma=0.072, c=0.05,
+                                     crescents=1)
+    half = draft_estimate(load_scene(scene, ["mesh.configuration=embedded", "mesh.rake_angle=45"]))
+    whole = narrow_tine_draft(2.0, 6.0, 45.0, phi=33.0, delta=22.0, gamma=0.072, c=0.05)
+    assert half.draft == pytest.approx(whole.draft / 2.0, rel=1e-9)
+    bonded = draft_estimate(load_scene(scene, ["tool.bonded=true"]))
+    assert bonded == narrow_tine_draft(2.0, 6.0, 90.0, phi=33.0, delta=33.0, gamma=0.072, c=0.05,
+                                       c_a=0.05, crescents=1)
+    assert draft_estimate(load_scene(ROOT / "scenes" / "column-elastic.toml")) is None
+
+
+def test_draft_figure_draws_the_estimate(tmp_path):
+    from types import SimpleNamespace
+    from soilbin import figures
+    from soilbin.scene import load_scene
+
+    scene = load_scene(ROOT / "scenes" / "tine-2in-90deg.toml")
+    records = [SimpleNamespace(displacement=0.05 * k, force=40.0 * k) for k in (1, 2)]
+    estimate = narrow_tine_draft(2.0, 6.0, 90.0, 33.0, 22.0, 0.072, crescents=1)
+    figures.curve_png(records, scene, tmp_path / "curve.png", estimate)
+    assert (tmp_path / "curve.png").stat().st_size > 0
