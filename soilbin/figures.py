@@ -7,10 +7,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def curve_png(records, scene, path):
-    """Force along the loading direction against displacement, one marker per converged step."""
+def curve_png(records, scene, path, estimate=None):
+    """Force along the loading direction against displacement, one marker per converged step;
+    with a closed-form draft ``estimate`` (DraftEstimate), a horizontal reference line."""
     fig, ax = plt.subplots(figsize=(5.5, 4))
     ax.plot([0.0] + [r.displacement for r in records], [0.0] + [r.force for r in records], "o-", ms=3)
+    if estimate is not None:
+        ax.axhline(estimate.draft, color="tab:red", ls="--", lw=1,
+                   label=f"{estimate.model}: {estimate.draft:.3g}")
+        ax.legend(fontsize=8)
     ax.set_xlabel(f"displacement along {scene.loading.direction.value} [{scene.units}]")
     ax.set_ylabel("force [along the loading direction]")
     ax.set_title(scene.name, fontsize=9)

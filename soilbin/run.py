@@ -1,4 +1,5 @@
 """Run a scene: mesh, problem, load stepping, outputs and the summary."""
+import dataclasses
 import time
 
 from mpi4py import MPI
@@ -6,6 +7,7 @@ from mpi4py import MPI
 from pathlib import Path
 
 from . import figures
+from .closed_form import narrow_tine_draft
 from .meshes import BUILDERS
 from .output import RunFolder
 from .problem import SoilProblem
@@ -25,6 +27,24 @@ def headline_results(scene, records, area):
         Headline.PEAK_PRESSURE: lambda: max(r.force for r in records) / area,
     }
     return {key: read[result.of]() / result.divide_by for key, result in scene.headline.items()}
+
+
+def draft_estimate(scene):
+    """McKyes & Ali draft of the modelled tool (a soil_bin scene with gravity and a soil
+    with c, phi), or None. The mesh holds the tool's span against a frictionless plane
+    (the glass wall, or the symmetry plane of the embedded half model): one crescent.
+    A bonded tool is fully rough: delta = phi, c_a = c."""
+    if scene.mesh_builder != "soil_bin" or scene.tool is None or scene.geostatic is None:
+        return None
+    soil = scene.materials[scene.regions["soil"]]
+    if not hasattr(soil, "phi") or not hasattr(soil, "c"):
+        return None
+    interface = scene.tool.interface
+    delta, c_a = (soil.phi, soil.c) if scene.tool.bonded else (interface.delta, interface.c_a)
+    mesh = scene.mesh
+    return narrow_tine_draft(width=mesh.span, depth=mesh.tool_depth, rake=mesh.rake_angle,
+                             phi=soil.phi, delta=delta, gamma=scene.geostatic.unit_weight,
+                             c=soil.c, c_a=c_a, crescents=1)
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
@@ -72,9 +92,12 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "wall_s": round(time.perf_counter() - start, 3),
         **headline_results(scene, records, problem.area),
     }
+    estimate = draft_estimate(scene)
+    if estimate is not None:
+        summary["draft_estimate"] = dataclasses.asdict(estimate)
     folder.finish(summary)
     if records and comm.rank == 0:
-        figures.curve_png(records, scene, out_dir / "curve.png")
+        figures.curve_png(records, scene, out_dir / "curve.png", estimate)
     if records and problem.tool is not None and problem.tool.interface is not None:
         figures.tool_section_png(problem, out_dir / "tool-section.png")
     return summary
