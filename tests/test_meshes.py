@@ -224,5 +224,5 @@ def test_non_hexahedra_are_refused_and_gmsh_is_finalized(monkeypatch):
 
     message = "only 8-node hexahedra" if COMM.rank == 0 else "failed to mesh 'tetrahedra' on rank 0"
     with pytest.raises(RuntimeError, match=message):
-        build_tagged_mesh(COMM, "tetrahedra", tetrahedra)
+        build_tagged_mesh(COMM, "tetrahedra", tetrahedra, regions=("soil",), boundaries=())
     assert len(calls) == 1
