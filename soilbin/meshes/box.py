@@ -20,7 +20,11 @@ class BoxParams(Params):
 
     def __post_init__(self):
         super().__post_init__()
-        check_cell_count(self.nx * self.ny * self.nz, "nx, ny, nz")
+        check_cell_count(self.cells, "nx, ny, nz")
+
+    @property
+    def cells(self) -> int:
+        return self.nx * self.ny * self.nz
 
 
 BOX = Builder(

@@ -33,8 +33,13 @@ class RetainingWallParams(Params):
         if self.wall_height >= self.depth:
             raise InputError(f"wall_height = {self.wall_height!r} must be less than depth = {self.depth!r} "
                              "(the soil reaches below the wall's toe)")
+        check_cell_count(self.cells, "element_size, growth, refine")
+
+    @property
+    def cells(self) -> int:
+        """Number of hexahedra (one layer)."""
         xs, zs = self.segments()
-        check_cell_count(sum(s.n for s in xs) * sum(s.n for s in zs), "element_size, growth, refine")
+        return sum(s.n for s in xs) * sum(s.n for s in zs)
 
     def segments(self):
         """The x and the z divisions (ascending) of the slab."""

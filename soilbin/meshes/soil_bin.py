@@ -79,10 +79,7 @@ class SoilBinParams(Params):
         if self.span >= self.bin_width:
             raise InputError(f"tool_width = {self.tool_width!r} leaves no soil beside the tool: its span "
                              f"{self.span!r} in y must be less than bin_width = {self.bin_width!r}")
-        xs, ys, zs = self.segments()
-        blade = xs[1].n * ys[0].n * zs[1].n
-        check_cell_count(sum(s.n for s in xs) * sum(s.n for s in ys) * sum(s.n for s in zs) - blade,
-                         "element_size, growth, refine and the extents")
+        check_cell_count(self.cells, "element_size, growth, refine and the extents")
 
     @property
     def span(self) -> float:
@@ -109,6 +106,12 @@ class SoilBinParams(Params):
     def length(self) -> float:
         """Length of the bin in x."""
         return self.tip + self.ahead
+
+    @property
+    def cells(self) -> int:
+        """Number of hexahedra: the block grid's without the blade's block."""
+        xs, ys, zs = self.segments()
+        return math.prod(sum(s.n for s in axis) for axis in (xs, ys, zs)) - xs[1].n * ys[0].n * zs[1].n
 
     def segments(self):
         """The (xi, y, z) divisions of the block grid, each list ascending; the blade's block

@@ -41,8 +41,8 @@ class StripFootingParams(Params):
 
     @property
     def cells(self):
-        """About as many cells as gmsh makes (473 for 442 on the defaults): the integral of
-        1/h(r)^2 over a half disc about the footing edge with the slab's area."""
+        """About as many cells as gmsh makes (442 for its 473 on the defaults): the integral
+        of 1/h(r)^2 over a half disc about the footing edge with the slab's area."""
         e, f, g = self.edge_size, self.far_size, self.size_growth
         radius = math.sqrt(2.0 * self.width * self.depth / math.pi)
         graded = min(radius, (f - e) / g)     # where h(r) reaches far_size
