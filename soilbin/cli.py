@@ -8,8 +8,7 @@ import sys
 from pathlib import Path
 
 from .errors import SoilbinError
-
-SCENES_DIR = Path(__file__).resolve().parent.parent / "scenes"
+from .toml_in import SCENES_DIR, read_toml, scene_path
 
 EPILOG = """\
 examples:
@@ -22,14 +21,6 @@ exit status: 0 done (a force-controlled run that stops at collapse with
 loading.until_collapse = true counts as done), 1 the run could not reach the
 full load (converged steps are on disk), 2 bad input.
 """
-
-
-def _scene_path(arg):
-    """A scene file path, or the name of a scene in the project's scenes/ folder."""
-    path = Path(arg)
-    if path.exists() or path.suffix == ".toml":
-        return path
-    return SCENES_DIR / f"{arg}.toml"
 
 
 def _parser():
@@ -113,8 +104,7 @@ def _point_parser(sub):
                        help="the last stdout line is the summary as one JSON object")
 
 
-def _list_scenes():
-    from .scene import read_toml
+def _list_scenes(args):
     for path in sorted(SCENES_DIR.glob("*.toml"), key=lambda p: p.stem):
         title = read_toml(path).get("title", "")
         print(f"{path.stem:32s} {title}")
@@ -130,11 +120,13 @@ def _progress(record, area):
 
 
 def _run(args):
+    import dolfinx  # noqa: F401  (configures logging; then quieten the JIT's INFO lines)
+    logging.getLogger().setLevel(logging.WARNING)
     from mpi4py import MPI
     from .scene import load_scene
     from .run import run_scene
 
-    scene = load_scene(_scene_path(args.scene), args.overrides)
+    scene = load_scene(scene_path(args.scene), args.overrides)
     out = args.out or Path("runs") / scene.name
     rank0 = MPI.COMM_WORLD.rank == 0
     summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress,
@@ -189,16 +181,10 @@ def _study(args):
 
 def main(argv=None):
     args = _parser().parse_args(argv)
-    if args.command in ("point", "study"):   # no DOLFINx to set up in this process
-        try:
-            return _point(args) if args.command == "point" else _study(args)
-        except SoilbinError as err:
-            print(f"soilbin: error: {err}", file=sys.stderr)
-            return 2
-    import dolfinx  # noqa: F401  (configures logging; then quieten the JIT's INFO lines)
-    logging.getLogger().setLevel(logging.WARNING)
+    command = {"run": _run, "list": _list_scenes, "point": _point,
+               "study": _study}[args.command]   # only run loads DOLFINx
     try:
-        return _list_scenes() if args.command == "list" else _run(args)
+        return command(args)
     except SoilbinError as err:
         print(f"soilbin: error: {err}", file=sys.stderr)
         return 2

@@ -5,6 +5,11 @@ A parameter record is a frozen dataclass whose fields are declared with
 is valid. :func:`from_table` builds a record from a TOML table and names the
 offending key (with its dotted path in the scene) when a key is unknown,
 missing, of the wrong type or out of range.
+
+Numbers are finite: NaN is refused everywhere (except where NaN is the
+field's default, the mark of a value not given), and so is ±inf unless the
+field's range names it as a closed bound (``param(hi=math.inf)``: inf
+accepted; a bound left out is open).
 """
 import dataclasses
 import enum
@@ -22,6 +27,8 @@ class Range:
     hi_open: bool = False
 
     def contains(self, x):
+        if math.isnan(x):
+            return False
         above = x > self.lo if self.lo_open else x >= self.lo
         below = x < self.hi if self.hi_open else x <= self.hi
         return above and below
@@ -32,12 +39,15 @@ class Range:
         return f"{lo}{self.lo:g}, {self.hi:g}{hi}"
 
 
-def param(default=dataclasses.MISSING, *, lo=-math.inf, hi=math.inf,
+def param(default=dataclasses.MISSING, *, lo=None, hi=None,
           lo_open=False, hi_open=False, doc=""):
-    """A dataclass field with an accepted range (numbers only) and a doc line."""
+    """A dataclass field with an accepted range (numbers only) and a doc line.
+
+    A bound left out is open at infinity; ``hi=math.inf`` (closed) accepts inf."""
     meta = {"doc": doc}
-    if lo != -math.inf or hi != math.inf:
-        meta["range"] = Range(lo, hi, lo_open, hi_open)
+    if lo is not None or hi is not None:
+        meta["range"] = Range(-math.inf if lo is None else lo, math.inf if hi is None else hi,
+                              lo_open or lo is None, hi_open or hi is None)
     if isinstance(default, (list, dict)):
         raise TypeError("use a tuple for a sequence default")
     return dataclasses.field(default=default, metadata=meta)
@@ -52,6 +62,17 @@ class Params:
             value = getattr(self, f.name)
             if rng is not None and not rng.contains(value):
                 raise InputError(f"{f.name} = {value!r} is outside the accepted range {rng}")
+            if rng is None and not _finite(value, f.default):
+                raise InputError(f"{f.name} = {value!r}: expected finite numbers")
+
+
+def _finite(value, default):
+    """No inf or NaN in a number or a sequence of numbers (NaN where it is the default)."""
+    if isinstance(value, (tuple, list)):
+        return all(_finite(v, None) for v in value)
+    if not isinstance(value, float) or math.isfinite(value):
+        return True
+    return math.isnan(value) and isinstance(default, float) and math.isnan(default)
 
 
 def _coerce(value, tp, where):

@@ -21,7 +21,6 @@ import enum
 import json
 import math
 import time
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +30,7 @@ from .models import MODELS
 from .params import from_table
 from .paths import PATHS
 from .tensors import IDENTITY, SQRT2, deviator, from_mandel, trace
+from .toml_in import assignment, read_toml, scene_path
 
 #: Newton iteration of one step: relative tolerance on the stress residual,
 #: iterations before the step is cut, and cuts (halvings) of one step.
@@ -52,26 +52,15 @@ class _NotConverged(Exception):
 
 # --------------------------------------------------------------------------- input
 
-def _parse_value(text):
-    """A --set value: any TOML value, or a bare word taken as a string."""
-    try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
-        return text
-
-
 def split_overrides(overrides):
     """'key=value' items -> (model table, path table); keys 'path.X' go to the path."""
     model, path = {}, {}
     for item in overrides:
-        key, sep, text = item.partition("=")
-        key = key.strip()
-        if not sep or not key:
-            raise InputError(f"--set {item!r}: expected key=value (path.key=value for the path)")
+        key, value = assignment(item, "key=value (path.key=value for the path)")
         target, name = (path, key[5:]) if key.startswith("path.") else (model, key)
         if not name or "." in name:
             raise InputError(f"--set {key}: expected a model parameter or path.KEY")
-        target[name] = _parse_value(text.strip())
+        target[name] = value
     return model, path
 
 
@@ -81,18 +70,10 @@ def material_table(spec):
     file, sep, material = spec.rpartition(":")
     if not sep or not file or not material:
         raise InputError(f"{spec!r}: expected SCENE.toml:MATERIAL")
-    path = Path(file)
-    if not path.exists() and path.suffix != ".toml":
-        path = Path(__file__).resolve().parent.parent / "scenes" / f"{file}.toml"
-    if not path.is_file():
-        raise InputError(f"{path}: no such scene file")
-    try:
-        with path.open("rb") as f:
-            raw = tomllib.load(f)
-    except tomllib.TOMLDecodeError as err:
-        raise InputError(f"{path}: TOML syntax error: {err}") from None
-    materials = raw.get("materials", {})
-    if material not in materials:
+    path = scene_path(file)
+    materials = read_toml(path).get("materials", {})
+    materials = materials if isinstance(materials, dict) else {}
+    if not isinstance(materials.get(material), dict):
         raise InputError(f"{path}: no material {material!r}; defined: {', '.join(materials)}")
     table = dict(materials[material])
     return table.pop("model", None), table

@@ -6,19 +6,19 @@ solver options, outputs and the headline results of its summary. Every
 value is checked (type, accepted range, known name) before anything is
 built; ``--set dotted.key=value`` overrides go through the same checks.
 """
+import copy
 import dataclasses
 import enum
-import tomllib
 from pathlib import Path
 
-import numpy as np
-
+from .elements import Element
 from .errors import InputError
-from .forms.discretisation import Element
+from .geostatic import Geostatic, read_geostatic
 from .interface.mohr_coulomb import MohrCoulombInterface
 from .meshes import BUILDERS
 from .models import MODELS
 from .params import Params, from_table, param
+from .toml_in import assignment, read_toml
 from . import toml_out
 
 
@@ -98,6 +98,10 @@ class Traction(Params):
     magnitude: float = param(lo=0.0, doc="traction (force/area)")
 
 
+#: Most load steps a scene may ask for (each is a Newton solve).
+MAX_STEPS = 10000
+
+
 @dataclasses.dataclass(frozen=True)
 class Loading(Params):
     control: Control = param(doc="force: a traction on the boundary; displacement: a prescribed displacement")
@@ -105,7 +109,7 @@ class Loading(Params):
     direction: Direction = param(doc="signed axis of the load, e.g. '-z'")
     magnitude: float = param(lo=0.0, lo_open=True,
                              doc="traction (force/area) or displacement (length) at load factor 1")
-    steps: int = param(lo=1, doc="number of equal load steps to load factor 1")
+    steps: int = param(lo=1, hi=MAX_STEPS, doc="number of equal load steps to load factor 1")
     max_cuts: int = param(8, lo=0, hi=30, doc="times a failing step may be halved in a row")
     until_collapse: bool = param(False, doc="force control: a step that cannot be converged "
                                             "marks the collapse load and ends the run normally")
@@ -115,26 +119,10 @@ TOOL = "tool"   # the loading boundary name that means the rigid tool
 
 
 @dataclasses.dataclass(frozen=True)
-class Geostatic(Params):
-    """Gravity and the K0 initial stress, in equilibrium before the first step:
-    σ_v = γ (z − z_s), σ_h = K0 σ_v (tension positive: compressive below the surface)."""
-    unit_weight: float = param(lo=0.0, doc="unit weight γ of the soil (force/volume)")
-    K0: float = param(lo=0.0, hi=10.0, doc="coefficient of earth pressure at rest")
-    surface: float = param(0.0, doc="z of the ground surface")
-
-    def stress(self, x):
-        """Initial stress (n, 6), Mandel, at the points x (n, 3)."""
-        vertical = self.unit_weight * (x[:, 2] - self.surface)
-        sigma = np.zeros((len(x), 6))
-        sigma[:, 0] = sigma[:, 1] = self.K0 * vertical
-        sigma[:, 2] = vertical
-        return sigma
-
-
-@dataclasses.dataclass(frozen=True)
 class Tool(Params):
     """A rigid tool in a cavity of the soil mesh, displaced as a whole (loading.boundary = 'tool')."""
-    faces: tuple[str, ...] = param(doc="soil boundaries against the tool (the cavity faces)")
+    faces: tuple[str, ...] = param(doc="soil boundaries against the tool (the cavity faces); "
+                                       "default: the mesh builder's contact groups")
     bonded: bool = param(False, doc="true: the faces move with the tool (no interface)")
     interface: MohrCoulombInterface = param(None, doc="Mohr-Coulomb interface law (unless bonded)")
 
@@ -236,33 +224,11 @@ def _model_name(model):
     return next(name for name, cls in MODELS.items() if type(model) is cls)
 
 
-def read_toml(path):
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: no such scene file")
-    try:
-        with path.open("rb") as f:
-            return tomllib.load(f)
-    except tomllib.TOMLDecodeError as err:
-        raise InputError(f"{path}: TOML syntax error: {err}") from None
-
-
-def _parse_value(text):
-    """A --set value: any TOML value, or a bare word taken as a string."""
-    try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
-        return text
-
-
 def apply_overrides(raw, overrides):
     """Apply 'dotted.key=value' overrides to the raw TOML dict (returns a new dict)."""
-    import copy
     raw = copy.deepcopy(raw)
     for item in overrides:
-        key, sep, text = item.partition("=")
-        if not sep or not key:
-            raise InputError(f"--set {item!r}: expected dotted.key=value")
+        key, value = assignment(item)
         *parents, leaf = key.split(".")
         node = raw
         for depth, part in enumerate(parents):
@@ -278,63 +244,75 @@ def apply_overrides(raw, overrides):
             raise InputError(f"--set {key}: {'.'.join(parents)!r} is not a table")
         if parents == [] and leaf not in TOP_LEVEL:
             raise InputError(f"--set {key}: unknown key; top-level keys: {', '.join(TOP_LEVEL)}")
-        node[leaf] = _parse_value(text)
+        node[leaf] = value
     return raw
 
 
 def _require(raw, key, kind):
     if key not in raw:
         raise InputError(f"missing table [{key}]" if kind is dict else f"missing key {key!r}")
-    if not isinstance(raw[key], kind):
-        raise InputError(f"{key}: expected a {'table' if kind is dict else kind.__name__}")
-    return raw[key]
+    return _optional(raw, key, kind)
+
+
+def _optional(raw, key, kind):
+    """raw[key] (empty if absent), which must be a table (dict) or an array of tables (list)."""
+    value = raw.get(key, kind())
+    if not isinstance(value, kind):
+        raise InputError(f"{key}: expected {'a table' if kind is dict else 'an array of tables [[' + key + ']]'}, "
+                         f"got {value!r}")
+    return value
+
+
+def _choice(value, where, choices, problem):
+    """A name among ``choices``; a list, a table or an unknown name is an error naming the key."""
+    if not isinstance(value, str) or value not in choices:
+        raise InputError(f"{where} = {value!r}: {problem}: {', '.join(choices)}")
+    return value
+
+
+def _text(raw, key, hint):
+    value = raw.get(key, "")
+    if not isinstance(value, str) or not value:
+        raise InputError(f"{key}: {hint}")
+    return value
 
 
 def _parse(raw, path):
     unknown = sorted(set(raw) - set(TOP_LEVEL))
     if unknown:
         raise InputError(f"unknown key {unknown[0]!r}; top-level keys: {', '.join(TOP_LEVEL)}")
+    title = _text(raw, "title", "a one-line description is required")
+    units = _text(raw, "units", "state the units of the scene, e.g. 'lb, in'")
     mesh_table = dict(_require(raw, "mesh", dict))
-    builder_name = mesh_table.pop("builder", None)
-    if builder_name not in BUILDERS:
-        raise InputError(f"mesh.builder = {builder_name!r}: unknown mesh builder; "
-                         f"known: {', '.join(BUILDERS)}")
+    builder_name = _choice(mesh_table.pop("builder", None), "mesh.builder", BUILDERS,
+                           "unknown mesh builder; known")
     builder = BUILDERS[builder_name]
     mesh = from_table(builder.params, mesh_table, "mesh")
 
     materials = {}
     for name, table in _require(raw, "materials", dict).items():
-        table = dict(table) if isinstance(table, dict) else table
         if not isinstance(table, dict) or "model" not in table:
             raise InputError(f"materials.{name}: missing key 'model'")
-        model_name = table.pop("model")
-        if model_name not in MODELS:
-            raise InputError(f"materials.{name}.model = {model_name!r}: unknown material model; "
-                             f"known: {', '.join(MODELS)}")
+        table = dict(table)
+        model_name = _choice(table.pop("model"), f"materials.{name}.model", MODELS,
+                             "unknown material model; known")
         materials[name] = from_table(MODELS[model_name], table, f"materials.{name}")
 
     regions = _require(raw, "regions", dict)
     for region, material in regions.items():
-        if region not in builder.regions:
-            raise InputError(f"regions.{region}: mesh builder {builder_name!r} has no region "
-                             f"{region!r}; its regions: {', '.join(builder.regions)}")
-        if material not in materials:
-            raise InputError(f"regions.{region} = {material!r}: no such material; "
-                             f"defined: {', '.join(materials)}")
+        _choice(region, f"regions.{region}", builder.regions,
+                f"mesh builder {builder_name!r} has no such region; its regions")
+        _choice(material, f"regions.{region}", materials, "no such material; defined")
     missing = [r for r in builder.regions if r not in regions]
     if missing:
         raise InputError(f"regions: no material for region {missing[0]!r}")
 
-    supports = raw.get("supports", [])
-    if not isinstance(supports, list):
-        raise InputError("supports: expected an array of tables [[supports]]")
-    supports = tuple(from_table(Support, s, f"supports[{i}]") for i, s in enumerate(supports))
-    tractions = raw.get("tractions", [])
-    if not isinstance(tractions, list):
-        raise InputError("tractions: expected an array of tables [[tractions]]")
-    tractions = tuple(from_table(Traction, t, f"tractions[{i}]") for i, t in enumerate(tractions))
+    supports = tuple(from_table(Support, s, f"supports[{i}]")
+                     for i, s in enumerate(_optional(raw, "supports", list)))
+    tractions = tuple(from_table(Traction, t, f"tractions[{i}]")
+                      for i, t in enumerate(_optional(raw, "tractions", list)))
     loading = from_table(Loading, _require(raw, "loading", dict), "loading")
-    tool = from_table(Tool, raw["tool"], "tool") if "tool" in raw else None
+    tool = _tool(raw, builder) if "tool" in raw else None
     named = [(f"supports[{i}].boundary", s.boundary) for i, s in enumerate(supports)]
     named += [(f"tractions[{i}].boundary", t.boundary) for i, t in enumerate(tractions)]
     named += [(f"tool.faces[{i}]", face) for i, face in enumerate(tool.faces if tool else ())]
@@ -346,34 +324,37 @@ def _parse(raw, path):
     else:
         named.append(("loading.boundary", loading.boundary))
     for where, name in named:
-        if name not in builder.boundaries:
-            raise InputError(f"{where} = {name!r}: mesh builder {builder_name!r} has no such "
-                             f"boundary; its boundaries: {', '.join(builder.boundaries)}")
+        _choice(name, where, builder.boundaries,
+                f"mesh builder {builder_name!r} has no such boundary; its boundaries")
 
     headline = {}
-    for key, value in raw.get("headline", {}).items():
+    for key, value in _optional(raw, "headline", dict).items():
         spec = value if isinstance(value, dict) else {"of": value}
         headline[key] = from_table(HeadlineResult, spec, f"headline.{key}")
 
-    title = raw.get("title", "")
-    if not isinstance(title, str) or not title:
-        raise InputError("title: a one-line description is required")
-    if "geostatic" in raw and any(from_table(Analysis, raw.get("analysis", {}), "analysis")
-                                  .frame_rotation):
-        raise InputError("geostatic: gravity acts along -z; it cannot be combined with "
-                         "analysis.frame_rotation")
-    output = from_table(Output, raw.get("output", {}), "output")
-    units = raw.get("units", "")
-    if not isinstance(units, str) or not units:
-        raise InputError("units: state the units of the scene, e.g. 'lb, in'")
+    analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
+    geostatic = None
+    if "geostatic" in raw:
+        if any(analysis.frame_rotation):
+            raise InputError("geostatic: gravity acts along -z; it cannot be combined with "
+                             "analysis.frame_rotation")
+        geostatic = read_geostatic(raw["geostatic"], {m: materials[m] for m in regions.values()})
     return Scene(path=path, title=title, units=units, mesh_builder=builder_name, mesh=mesh,
                  materials=materials, regions=dict(regions), supports=supports, loading=loading,
-                 analysis=from_table(Analysis, raw.get("analysis", {}), "analysis"),
-                 solver=from_table(Solver, raw.get("solver", {}), "solver"),
-                 output=output,
-                 headline=headline, tool=tool, tractions=tractions,
-                 geostatic=(from_table(Geostatic, raw["geostatic"], "geostatic")
-                            if "geostatic" in raw else None))
+                 analysis=analysis, solver=from_table(Solver, raw.get("solver", {}), "solver"),
+                 output=from_table(Output, raw.get("output", {}), "output"),
+                 headline=headline, tool=tool, tractions=tractions, geostatic=geostatic)
+
+
+def _tool(raw, builder):
+    """The [tool] record; its faces default to the mesh builder's contact groups."""
+    table = _optional(raw, "tool", dict)
+    if "faces" not in table:
+        if not builder.contact:
+            raise InputError(f"tool.faces: required: mesh builder {builder.name!r} declares no "
+                             f"contact groups; its boundaries: {', '.join(builder.boundaries)}")
+        table = {**table, "faces": list(builder.contact)}
+    return from_table(Tool, table, "tool")
 
 
 def load_scene(path, overrides=()):

@@ -9,7 +9,6 @@ for stress and strain alike, so ``A:B`` is the dot product of the two
 whose major symmetry is plain matrix symmetry. Stress is positive in tension.
 """
 import numpy as np
-import ufl
 
 SQRT2 = np.sqrt(2.0)
 
@@ -45,12 +44,14 @@ def from_mandel(v):
 
 def ufl_mandel(a):
     """UFL symmetric 3x3 tensor -> UFL Mandel 6-vector (same order as above)."""
+    import ufl   # here, not above: the models and the records layer load no UFL
     s = SQRT2
     return ufl.as_vector([a[0, 0], a[1, 1], a[2, 2], s * a[1, 2], s * a[0, 2], s * a[0, 1]])
 
 
 def ufl_from_mandel(v):
     """UFL Mandel 6-vector -> UFL symmetric 3x3 tensor."""
+    import ufl
     r = 1.0 / SQRT2
     return ufl.as_matrix([[v[0], r * v[5], r * v[4]],
                           [r * v[5], v[1], r * v[3]],

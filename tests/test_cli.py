@@ -100,3 +100,57 @@ def test_a_run_that_cannot_finish_keeps_its_steps(tmp_path):
     assert "smallest increment" in done.stderr
     rows = (tmp_path / "fail" / "curve.csv").read_text().strip().splitlines()
     assert len(rows) == 1 + summary["n_steps"] and summary["n_steps"] >= 8
+
+
+@pytest.mark.parametrize("override, expected", [
+    ("regions.soil=[1]", "regions.soil = [1]: no such material; defined: soil"),
+    ("materials.soil.model={a = 1}", "materials.soil.model = {'a': 1}: unknown material model; known: elastic"),
+    ('mesh.builder=["box"]', "mesh.builder = ['box']: unknown mesh builder; known: box"),
+    ("headline=5", "headline: expected a table, got 5"),
+    ("supports=5", "supports: expected an array of tables [[supports]], got 5"),
+    ("mesh.lx=inf", "mesh.lx = inf is outside the accepted range (0, 1e+06]"),
+    ("mesh.lx=1e300", "mesh.lx = 1e+300 is outside the accepted range (0, 1e+06]"),
+    ("mesh.lx=nan", "mesh.lx = nan is outside the accepted range (0, 1e+06]"),
+    ("loading.magnitude=inf", "loading.magnitude = inf is outside the accepted range (0, inf)"),
+    ("loading.steps=1000000", "loading.steps = 1000000 is outside the accepted range [1, 10000]"),
+    ("mesh.nz=1000000000", "mesh.nx, ny, nz give about 4e+09 cells; accepted: at most 1e+06"),
+    ("mesh.nz=1e9", "mesh.nz: expected an integer, got 1000000000.0"),
+    ("materials.soil.E=inf", "materials.soil.E = inf is outside the accepted range (0, inf)"),
+    ("analysis.frame_rotation=[0, nan, 0]", "analysis.frame_rotation = (0.0, nan, 0.0): expected finite numbers"),
+])
+def test_names_tables_and_numbers_out_of_bounds_are_one_clear_line(capsys, override, expected):
+    status, _, err = run_main(capsys, "run", BLOCK, "--set", override)
+    assert status == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert f"{BLOCK}: {expected}" in err
+
+
+@pytest.mark.parametrize("scene, overrides, expected", [
+    ("tine-2in-90deg", ["geostatic.surface=nan"], "geostatic.surface = nan: expected finite numbers"),
+    ("tine-2in-90deg", ["geostatic.unit_weight=inf"],
+     "geostatic.unit_weight = inf is outside the accepted range [0, inf)"),
+    ("tine-2in-90deg", ["mesh.refine=1000000"], "mesh.refine = 1000000 is outside the accepted range [1, 32]"),
+    ("tine-2in-90deg", ["mesh.refine=32"],
+     "mesh.element_size, growth, refine and the extents give about 8.82e+07 cells; accepted: at most 1e+06"),
+    ("tine-2in-90deg", ["mesh.element_size=1e-4"],
+     "mesh.element_size, growth, refine and the extents give about 1.17e+11 cells"),
+    ("strip-footing-von-mises", ["mesh.size_growth=1e-9"],
+     "mesh.size_growth = 1e-09 is outside the accepted range [0.01, 2]"),
+    ("strip-footing-von-mises", ["mesh.size_growth=0.01", "mesh.refine=7"],
+     "mesh.edge_size, far_size, size_growth, refine give about 1.24e+06 cells; accepted: at most 1e+06"),
+    ("retaining-wall-passive", ["mesh.element_size=1e-2", "mesh.growth=1.0"],
+     "mesh.element_size, growth, refine give about 4.5e+06 cells; accepted: at most 1e+06"),
+])
+def test_absurd_meshes_are_refused_before_gmsh_runs(capsys, monkeypatch, scene, overrides, expected):
+    import gmsh
+    monkeypatch.setattr(gmsh, "initialize", lambda *a, **k: pytest.fail("gmsh ran"))
+    status, _, err = run_main(capsys, "run", scene, *(f"--set={o}" for o in overrides))
+    assert status == 2 and len(err.strip().splitlines()) == 1
+    assert f"{scene}.toml: {expected}" in err
+
+
+def test_a_scene_that_is_not_utf8_is_a_clear_error(capsys, tmp_path):
+    latin1 = tmp_path / "latin1.toml"
+    latin1.write_bytes((SCENES / "block-drucker-prager.toml").read_bytes().replace(b"Drucker", b"Dr\xfccker"))
+    status, _, err = run_main(capsys, "run", str(latin1))
+    assert status == 2 and "Traceback" not in err
+    assert f"{latin1}: not UTF-8 text (byte " in err

@@ -12,7 +12,9 @@ from mpi4py import MPI
 
 from soilbin.errors import InputError
 from soilbin.meshes import BUILDERS, StripFootingParams
-from soilbin.meshes.blocks import entities_within
+from soilbin.elements import CELL
+from soilbin.meshes.blocks import entities_within, extruded_grid
+from soilbin.meshes.segments import Segment
 from soilbin.meshes.tagged import build_tagged_mesh
 from soilbin.params import from_table
 
@@ -154,6 +156,28 @@ def test_refine_2_gives_about_4x_the_cells(slab, slab2):
 
 
 @pytest.mark.parametrize("tm_name, refine", [("slab", 1), ("slab2", 2)])
+def test_the_cell_estimate_before_gmsh_runs_is_within_15_percent(tm_name, refine, request):
+    estimate = StripFootingParams(refine=refine).cells
+    assert estimate == pytest.approx(num_cells(request.getfixturevalue(tm_name)), rel=0.15)
+
+
+def test_a_geometry_that_makes_other_groups_than_declared_is_refused():
+    def one_face_missing():
+        extruded_grid([Segment(0.0, 1.0, 1)], [Segment(0.0, 1.0, 1)], 1.0, 1)
+        return {"soil": entities_within(3)}, {"base": entities_within(2, z=0.0)}
+
+    message = (r"declared: \['base', 'top'\]" if COMM.rank == 0
+               else "failed to mesh 'cube' on rank 0")
+    with pytest.raises(RuntimeError, match=message):
+        build_tagged_mesh(COMM, "cube", one_face_missing, regions=("soil",), boundaries=("base", "top"))
+
+
+def test_every_mesh_is_made_of_the_one_cell_type(box, slab):
+    for tm in (box, slab):
+        assert tm.mesh.topology.cell_type.name == CELL
+
+
+@pytest.mark.parametrize("tm_name, refine", [("slab", 1), ("slab2", 2)])
 def test_smallest_cells_are_at_the_footing_edge(tm_name, refine, request):
     size, r = sizes_and_distances(request.getfixturevalue(tm_name))
     edge_size = SLAB.edge_size / refine
@@ -224,5 +248,5 @@ def test_non_hexahedra_are_refused_and_gmsh_is_finalized(monkeypatch):
 
     message = "only 8-node hexahedra" if COMM.rank == 0 else "failed to mesh 'tetrahedra' on rank 0"
     with pytest.raises(RuntimeError, match=message):
-        build_tagged_mesh(COMM, "tetrahedra", tetrahedra)
+        build_tagged_mesh(COMM, "tetrahedra", tetrahedra, regions=("soil",), boundaries=())
     assert len(calls) == 1

@@ -127,6 +127,7 @@ def test_soil_bin_size_refine_2_gives_8x_and_smallest_cells_are_next_to_the_blad
     coarse, fine = built("soil_bin"), built("soil_bin", refine=2)
     assert 2000 <= num_cells(coarse) <= 6000
     assert num_cells(fine) == 8 * num_cells(coarse)
+    assert num_cells(coarse) == SoilBinParams().cells   # counted before gmsh runs
     for tm in (coarse, fine, built("soil_bin", rake_angle=30.0, configuration="embedded")):
         v = cell_volumes(tm)
         near, least = v[cells_touching(tm, TOOL_FACES)], smallest(v)
@@ -160,6 +161,7 @@ def test_retaining_wall_size_refine_and_grading():
     coarse, fine = built("retaining_wall"), built("retaining_wall", refine=2)
     assert 200 <= num_cells(coarse) <= 1000
     assert num_cells(fine) == 4 * num_cells(coarse)
+    assert num_cells(coarse) == RetainingWallParams().cells
     v = cell_volumes(coarse)
     near = v[cells_touching(coarse, ["wall"])]
     assert smallest(near) == smallest(v)

@@ -9,30 +9,11 @@ pair gives the LBB-stable Q2/P1 element. θ and p are cell-local, so they add
 only cell-interior unknowns to the direct solve.
 """
 import dataclasses
-import enum
 
 import ufl
 from dolfinx import fem
 
-
-class Element(enum.Enum):
-    HEX8 = "hex8"
-    HEX8_BBAR = "hex8-bbar"
-    HEX27 = "hex27"
-    HEX27_BBAR = "hex27-bbar"
-
-    @property
-    def degree(self):
-        return 1 if self in (Element.HEX8, Element.HEX8_BBAR) else 2
-
-    @property
-    def mixed(self):
-        return self in (Element.HEX8_BBAR, Element.HEX27_BBAR)
-
-    @property
-    def quadrature_degree(self):
-        """Gauss rule: 2x2x2 points for trilinear, 3x3x3 for triquadratic."""
-        return 2 * self.degree
+from ..elements import CELL, Element
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,6 +25,8 @@ class Discretisation:
     @classmethod
     def create(cls, mesh, element):
         cell = mesh.ufl_cell()
+        if cell.cellname() != CELL:
+            raise ValueError(f"{element.value} needs a mesh of {CELL} cells, not {cell.cellname()}")
         ve = ufl.VectorElement("Lagrange", cell, element.degree)
         if not element.mixed:
             space = fem.FunctionSpace(mesh, ve)

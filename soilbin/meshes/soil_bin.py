@@ -1,15 +1,18 @@
-"""A rigid thin blade (tillage tool) in a soil bin: the soil around a blade-shaped cavity.
+"""The soil-bin builder's declaration: a rigid thin blade (tillage tool) in a soil bin,
+the soil around a blade-shaped cavity.
 
 x is the direction of travel, y across, z up; the ground surface is z = 0.
 The blade is a parallelepiped: tool_thickness thick, tool_depth deep, its
 faces inclined at the rake angle to the x axis and leaning back, so its lower
 tip is its most forward point. It is not meshed; the four faces of the
-cavity it leaves in the soil, :data:`TOOL_FACES`, carry the soil-tool
-interface, and :func:`tool_faces` gives their planes. A facet carries one
-tag, so there is no group of their union: integrate over ds(all four tags).
-The blade lies against y = 0: the glass side wall of the bin ("side_wall",
-the full tool) or the symmetry plane of a tool in the middle of the bin
-("embedded", half the tool).
+cavity it leaves in the soil, :data:`TOOL_FACES` (the builder's contact
+groups), carry the soil-tool interface, and :func:`tool_faces` gives their
+planes. A facet carries one tag, so there is no group of their union:
+integrate over ds(all four tags). The blade lies against y = 0: the glass
+side wall of the bin ("side_wall", the full tool) or the symmetry plane of a
+tool in the middle of the bin ("embedded", half the tool). The bin reaches
+:data:`END_DISTANCE` tool widths ahead of and behind the blade unless the
+scene says otherwise (section VIII: "about 9 times the width of the tool").
 
 The mesh is a grid of structured blocks in (xi, y, z) without the blade's
 block, mapped by x = xi + shear(z) blend(xi): shear(z) = -(z + d) / tan(rake)
@@ -25,12 +28,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from mpi4py import MPI
 
 from ..errors import InputError
 from ..params import Params, param
-from .blocks import Segment, block_grid, entities_within, on_plane
-from .tagged import TaggedMesh, build_tagged_mesh
+from .builder import MAX_LENGTH, Builder, check_cell_count, length_param, refine_param
+from .segments import Segment
+
+#: Default length of soil ahead of and behind the blade, in tool widths.
+END_DISTANCE = 9.0
 
 
 class Configuration(enum.Enum):
@@ -38,33 +43,35 @@ class Configuration(enum.Enum):
     EMBEDDED = "embedded"      # half a tool in the middle of the bin, symmetric about y = 0
 
 
+def _end_param(doc):
+    """A length of soil beyond the blade; not given: END_DISTANCE tool widths."""
+    return param(None, lo=0.0, hi=MAX_LENGTH, lo_open=True, doc=f"{doc}; default {END_DISTANCE:g} tool widths")
+
+
 @dataclass(frozen=True)
 class SoilBinParams(Params):
-    tool_width: float = param(2.0, lo=0.0, lo_open=True, doc="width of the blade (across, in y)")
-    tool_thickness: float = param(0.5, lo=0.0, lo_open=True,
-                                  doc="thickness of the blade, normal to its faces")
-    tool_depth: float = param(6.0, lo=0.0, lo_open=True, doc="depth of the blade's tip below the surface")
+    tool_width: float = length_param(2.0, "width of the blade (across, in y)")
+    tool_thickness: float = length_param(0.5, "thickness of the blade, normal to its faces")
+    tool_depth: float = length_param(6.0, "depth of the blade's tip below the surface")
     rake_angle: float = param(90.0, lo=30.0, hi=90.0,
                               doc="angle [degrees] between the blade and the direction of travel "
                                   "(90 = vertical; below 90 the blade leans back, its tip forward)")
     configuration: Configuration = param(
         Configuration.SIDE_WALL, doc="side_wall (the tool against the glass wall y = 0, full width) or "
                                      "embedded (half of a tool in the middle of the bin, y = 0 symmetry)")
-    bin_depth: float = param(12.0, lo=0.0, lo_open=True, doc="depth of the soil (> tool_depth)")
-    bin_width: float = param(18.0, lo=0.0, lo_open=True,
-                             doc="extent of the soil in y from y = 0 (> the tool's span in y)")
-    ahead: float = param(18.0, lo=0.0, lo_open=True,
-                         doc="length of soil in front of the blade's tip (its most forward point)")
-    behind: float = param(18.0, lo=0.0, lo_open=True,
-                          doc="length of soil behind the top of the blade's back face (its rearmost point)")
-    element_size: float = param(0.75, lo=0.0, lo_open=True,
-                                doc="length of the elements next to the blade, in x, y and z")
+    bin_depth: float = length_param(12.0, "depth of the soil (> tool_depth)")
+    bin_width: float = length_param(18.0, "extent of the soil in y from y = 0 (> the tool's span in y)")
+    ahead: float = _end_param("length of soil in front of the blade's tip (its most forward point)")
+    behind: float = _end_param("length of soil behind the top of the blade's back face (its rearmost point)")
+    element_size: float = length_param(0.75, "length of the elements next to the blade, in x, y and z")
     growth: float = param(1.3, lo=1.0, hi=2.0,
                           doc="ratio of neighbouring element lengths away from the blade")
-    refine: int = param(1, lo=1, doc="splits every element into refine^3 "
-                                     "(nested; refine = 2 gives 8x the cells)")
+    refine: int = refine_param("splits every element into refine^3 (nested; refine = 2 gives 8x the cells)")
 
     def __post_init__(self):
+        for end in ("ahead", "behind"):
+            if getattr(self, end) is None:
+                object.__setattr__(self, end, END_DISTANCE * self.tool_width)
         super().__post_init__()
         if self.tool_depth >= self.bin_depth:
             raise InputError(f"tool_depth = {self.tool_depth!r} must be less than "
@@ -72,6 +79,7 @@ class SoilBinParams(Params):
         if self.span >= self.bin_width:
             raise InputError(f"tool_width = {self.tool_width!r} leaves no soil beside the tool: its span "
                              f"{self.span!r} in y must be less than bin_width = {self.bin_width!r}")
+        check_cell_count(self.cells, "element_size, growth, refine and the extents")
 
     @property
     def span(self) -> float:
@@ -99,6 +107,24 @@ class SoilBinParams(Params):
         """Length of the bin in x."""
         return self.tip + self.ahead
 
+    @property
+    def cells(self) -> int:
+        """Number of hexahedra: the block grid's without the blade's block."""
+        xs, ys, zs = self.segments()
+        return math.prod(sum(s.n for s in axis) for axis in (xs, ys, zs)) - xs[1].n * ys[0].n * zs[1].n
+
+    def segments(self):
+        """The (xi, y, z) divisions of the block grid, each list ascending; the blade's block
+        is (1, 0, 1)."""
+        d, back = self.tool_depth, self.tip - self.blade
+
+        def segment(start, end, growth=self.growth):
+            return Segment.growing(start, end, self.element_size, growth).refined(self.refine)
+
+        return ([segment(back, 0.0), segment(back, self.tip, 1.0), segment(self.tip, self.length)],
+                [segment(0.0, self.span, 1.0), segment(self.span, self.bin_width)],
+                [segment(-d, -self.bin_depth), segment(-d, 0.0, 1.0)])
+
 
 #: Facet groups of the cavity's faces: the contact surface.
 TOOL_FACES = ("tool_front", "tool_back", "tool_side", "tool_bottom")
@@ -115,38 +141,10 @@ def tool_faces(p: SoilBinParams) -> dict[str, tuple[np.ndarray, np.ndarray]]:
             "tool_bottom": (heel, np.array([0.0, 0.0, 1.0]))}
 
 
-def soil_blocks(p: SoilBinParams) -> None:
-    """The (xi, y, z) block grid without the blade's block, mapped to x = xi + shear(z) blend(xi)."""
-    d, back = p.tool_depth, p.tip - p.blade
-
-    def segment(start, end, growth=p.growth):
-        return Segment.growing(start, end, p.element_size, growth).refined(p.refine)
-
-    xs = [segment(back, 0.0), segment(back, p.tip, 1.0), segment(p.tip, p.length)]
-    ys = [segment(0.0, p.span, 1.0), segment(p.span, p.bin_width)]
-    zs = [segment(-d, -p.bin_depth), segment(-d, 0.0, 1.0)]
-
-    def mapping(xi, y, z):
-        blend = min(xi / back, 1.0, (p.length - xi) / p.ahead)
-        return xi - max(z + d, 0.0) / d * p.run * blend, y, z
-
-    block_grid(xs, ys, zs, keep=lambda i, j, k: (i, j, k) != (1, 0, 1), mapping=mapping)
-
-
-def build_soil_bin(p: SoilBinParams, comm: MPI.Comm) -> TaggedMesh:
-    """Cell group ``soil``; facet groups: see BUILDERS["soil_bin"]."""
-    def geometry():
-        soil_blocks(p)
-        cavity = entities_within(2, x=(p.behind, p.tip), y=(0.0, p.span), z=(-p.tool_depth, 0.0))
-        boundaries = {name: on_plane(2, cavity, *plane) for name, plane in tool_faces(p).items()}
-        boundaries |= {
-            "surface": entities_within(2, z=0.0),
-            "base": entities_within(2, z=-p.bin_depth),
-            "symmetry": entities_within(2, y=0.0),
-            "side": entities_within(2, y=p.bin_width),
-            "front_end": entities_within(2, x=p.length),
-            "back_end": entities_within(2, x=0.0),
-        }
-        return {"soil": entities_within(3)}, boundaries
-
-    return build_tagged_mesh(comm, "soil_bin", geometry)
+SOIL_BIN = Builder(
+    name="soil_bin", params=SoilBinParams,
+    summary="soil bin around the cavity of a rigid thin blade (tool, not meshed) at a rake angle, "
+            "graded toward the blade; the contact surface is the four tool_* groups",
+    regions=("soil",),
+    boundaries=TOOL_FACES + ("surface", "base", "symmetry", "side", "front_end", "back_end"),
+    contact=TOOL_FACES, geometry="soil_bin_geometry")

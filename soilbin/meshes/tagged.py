@@ -9,8 +9,7 @@ import gmsh
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
-#: gmsh element type of the 8-node hexahedron.
-HEXAHEDRON = 5
+from ..elements import CELL
 
 #: Group name -> gmsh entity tags (volumes for regions, surfaces for boundaries).
 Groups = dict[str, list[int]]
@@ -27,13 +26,14 @@ class TaggedMesh:
     boundaries: dict[str, int]  # facet group name -> tag
 
 
-def build_tagged_mesh(comm: MPI.Comm, name: str,
-                      geometry: Callable[[], tuple[Groups, Groups]]) -> TaggedMesh:
+def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Groups, Groups]], *,
+                      regions: tuple[str, ...], boundaries: tuple[str, ...]) -> TaggedMesh:
     """Mesh the gmsh model made by ``geometry`` on rank 0 and distribute it.
 
     ``geometry`` builds and synchronizes the model and returns the volumes of
-    each region and the surfaces of each boundary. Groups are tagged 1, 2, ...
-    in that order, regions first, so no two groups share a tag.
+    each region and the surfaces of each boundary; they must be exactly the
+    declared ``regions`` and ``boundaries``, none empty. Groups are tagged
+    1, 2, ... in the declared order, regions first, so no two groups share a tag.
     """
     gmsh.initialize(readConfigFiles=False)
     try:
@@ -42,7 +42,9 @@ def build_tagged_mesh(comm: MPI.Comm, name: str,
             groups = None
             try:
                 gmsh.model.add(name)
-                groups = _mesh_hexahedra(*geometry())
+                made_regions, made_boundaries = geometry()
+                groups = _mesh_hexahedra(_as_declared(name, "regions", regions, made_regions),
+                                         _as_declared(name, "boundaries", boundaries, made_boundaries))
             finally:
                 comm.bcast(groups, root=0)  # None tells the other ranks to stop
         else:
@@ -55,6 +57,13 @@ def build_tagged_mesh(comm: MPI.Comm, name: str,
     return TaggedMesh(mesh, cell_tags, facet_tags, *groups)
 
 
+def _as_declared(name: str, kind: str, declared: tuple[str, ...], made: Groups) -> Groups:
+    """The groups the geometry made, in the declared order; exactly the declared ones."""
+    if set(made) != set(declared):
+        raise RuntimeError(f"{name}: the geometry made {kind} {sorted(made)}; declared: {sorted(declared)}")
+    return {group: made[group] for group in declared}
+
+
 def _mesh_hexahedra(regions: Groups, boundaries: Groups) -> tuple[dict[str, int], dict[str, int]]:
     """Add the physical groups, mesh in 3D, and check that only hexahedra were made."""
     unassigned = {t for _, t in gmsh.model.getEntities(3)} - set().union(*regions.values())
@@ -64,7 +73,7 @@ def _mesh_hexahedra(regions: Groups, boundaries: Groups) -> tuple[dict[str, int]
     tags = _add_physical_groups(3, regions, numbers), _add_physical_groups(2, boundaries, numbers)
     gmsh.model.mesh.generate(3)
     types = list(gmsh.model.mesh.getElementTypes(3))
-    if types != [HEXAHEDRON]:
+    if types != [gmsh.model.mesh.getElementType(CELL, 1)]:
         made = ", ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
         raise RuntimeError(f"gmsh made 3D elements [{made}]; only 8-node hexahedra are supported")
     return tags

@@ -8,10 +8,12 @@ region's points, and the trial history becomes committed only in
 :meth:`commit`, after the load step converged.
 """
 import basix
+import basix.cell
 import numpy as np
 import ufl
 from dolfinx import fem
 
+from ..elements import CELL
 from ..tensors import from_mandel, to_mandel
 
 
@@ -39,7 +41,7 @@ class MaterialPoints:
         ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3)."""
         mesh = disc.mesh
         degree = disc.element.quadrature_degree
-        points, _ = basix.make_quadrature(basix.CellType.hexahedron, degree)
+        points, _ = basix.make_quadrature(basix.cell.string_to_type(CELL), degree)
         self.points_per_cell = len(points)
         imap = mesh.topology.index_map(mesh.topology.dim)
         self._cells = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)

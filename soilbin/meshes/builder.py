@@ -1,0 +1,62 @@
+"""The declaration of a mesh builder (records level: no gmsh, no DOLFINx).
+
+A builder declares, in one place, its parameter record, the cell groups
+(regions) and facet groups (boundaries) of every mesh it makes, which of the
+boundaries are the contact surface of a rigid tool, and the module whose
+``geometry(params)`` builds the gmsh model. That module is imported only
+when a mesh is built, so a scene can be read without gmsh; building checks
+that the geometry made exactly the declared groups, none of them empty.
+"""
+import importlib
+from dataclasses import dataclass
+
+from ..errors import InputError
+from ..params import param
+
+#: Most cells a mesh may have: more would not fit the machine (about 3e6 unknowns
+#: of hex8 cells for a direct solve); refuse before gmsh runs.
+MAX_CELLS = 1_000_000
+#: Most times a builder's ``refine`` may split its elements (per direction).
+MAX_REFINE = 32
+
+
+@dataclass(frozen=True)
+class Builder:
+    name: str
+    params: type                 # a Params record: the builder's parameters
+    summary: str
+    regions: tuple[str, ...]     # cell groups of every mesh it builds
+    boundaries: tuple[str, ...]  # facet groups of every mesh it builds
+    contact: tuple[str, ...]     # the boundaries a rigid tool acts on (the default tool.faces)
+    geometry: str                # module (in soilbin.meshes) with geometry(params) -> (regions, boundaries)
+
+    def __post_init__(self):
+        stray = set(self.contact) - set(self.boundaries)
+        if stray:
+            raise ValueError(f"builder {self.name!r}: contact groups {sorted(stray)} are not boundaries")
+
+    def build(self, params, comm):
+        """Mesh with gmsh on rank 0 and distribute over ``comm``: a TaggedMesh."""
+        from .tagged import build_tagged_mesh
+        geometry = importlib.import_module(f"{__package__}.{self.geometry}").geometry
+        return build_tagged_mesh(comm, self.name, lambda: geometry(params),
+                                 regions=self.regions, boundaries=self.boundaries)
+
+
+def check_cell_count(cells, keys):
+    """Refuse a mesh of more than MAX_CELLS cells; ``keys`` names the parameters that set it."""
+    if cells > MAX_CELLS:
+        raise InputError(f"{keys} give about {cells:.3g} cells; accepted: at most {MAX_CELLS:g}")
+
+
+#: Longest extent a mesh parameter may have, in the scene's length unit.
+MAX_LENGTH = 1.0e6
+
+
+def length_param(default, doc):
+    """A positive, finite length of the geometry."""
+    return param(default, lo=0.0, hi=MAX_LENGTH, lo_open=True, doc=doc)
+
+
+def refine_param(doc):
+    return param(1, lo=1, hi=MAX_REFINE, doc=doc)
