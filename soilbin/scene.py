@@ -319,8 +319,9 @@ def _parse(raw, path):
     if loading.boundary == TOOL:
         if tool is None:
             raise InputError("loading.boundary = 'tool' needs a [tool] table")
-        if loading.control is not Control.DISPLACEMENT:
-            raise InputError("loading.control: the rigid tool is driven by displacement control")
+        if loading.control is Control.FORCE and tool.bonded:
+            raise InputError("loading.control = 'force': a force-controlled tool acts through "
+                             "its interface; set tool.bonded = false")
     else:
         named.append(("loading.boundary", loading.boundary))
     for where, name in named:

@@ -46,18 +46,20 @@ def jacobian_error(problem, seed=0):
     w.x.array[fixed] = 0.0
 
     def residual(x):
+        x.copy(w.vector)
+        w.x.scatter_forward()
         b = x.duplicate()
-        newton._F(None, x, b)
+        newton.residual(b)
         return b.array.copy()
 
     x0 = w.vector.copy()
     residual(x0)
-    newton._J(None, x0, newton._A, newton._A)
+    newton.jacobian(newton.matrix)
     dx = x0.duplicate()
     dx.array[:] = rng.standard_normal(len(dx.array))
     dx.array[fixed] = 0.0
-    Jdx = newton._A.createVecLeft()
-    newton._A.mult(dx, Jdx)
+    Jdx = newton.matrix.createVecLeft()
+    newton.matrix.mult(dx, Jdx)
     h = 1e-7
     fd = (residual(x0 + h * dx) - residual(x0 - h * dx)) / (2 * h)
     exact = Jdx.array.copy()

@@ -12,9 +12,9 @@ COARSE = ("mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "mesh.b
           "mesh.bin_width=10.0", "loading.magnitude=0.04", "loading.steps=2")
 
 
-def solve(*overrides):
+def solve(*overrides, steps=2):
     problem = make_problem("tine-2in-90deg", *COARSE, *overrides)
-    result = run_load_steps(problem, 2, 4, lambda r: None)
+    result = run_load_steps(problem, steps, 4, lambda r: None)
     assert result.complete
     return problem, result.steps[-1]
 
@@ -51,3 +51,14 @@ def test_bonded_tool_is_stiffer_than_the_interface():
     _, with_interface = solve()
     _, bonded = solve("tool.bonded=true")
     assert bonded.force > with_interface.force
+
+
+def test_force_controlled_tool_reaches_the_draft_of_the_displacement_controlled_run():
+    """Force control: the tool's travel is an unknown; the draft equals the applied force
+    and the tool stops where the displacement-controlled run needed that draft."""
+    _, pushed = solve(steps=8)
+    problem, pulled = solve("loading.control=force", f"loading.magnitude={pushed.force}", steps=8)
+    assert pulled.force == pytest.approx(pushed.force, rel=1e-6)
+    assert problem.tool.draft() == pytest.approx(pushed.force, rel=1e-6)
+    assert pulled.displacement == pytest.approx(pushed.displacement, rel=0.01)
+    assert max(pulled.residuals[1:]) < pulled.residuals[0]   # Newton with the border converges

@@ -106,6 +106,18 @@ class RigidToolContact:
         blocks = self.areas[:, None, None] * self._tangent * free
         A.setValuesLocalRCV(self.dofs, self.dofs, blocks, addv=PETSc.InsertMode.ADD)
 
+    def travel_derivatives(self, direction, b, c):
+        """For a tool translating by a·direction, with the draft −Σ A t·direction:
+        ∂(residual)/∂a into b and ∂(draft)/∂u into c (free dofs of the contact points);
+        returns ∂(draft)/∂a, summed over ranks."""
+        t_d = self._tangent @ direction                                # T d
+        tt_d = np.einsum("pji,j->pi", self._tangent, direction)        # Tᵀ d
+        for vector, values in ((b, -self.areas[:, None] * t_d), (c, -self.areas[:, None] * tt_d)):
+            with vector.localForm() as local:
+                local.set(0.0)
+                np.add.at(local.array, self.dofs.ravel(), (values * self._free).ravel())
+        return self.comm.allreduce(float(self.areas @ (t_d @ direction)), op=MPI.SUM)
+
     def commit(self):
         self.committed = self.trial
         if self._incremental:   # the unknown restarts from zero after the commit

@@ -71,9 +71,11 @@ class SoilProblem:
             self.drive.measure_with(internal)
         jacobian = self.kinematics.jacobian(residual, self.points,
                                             ufl.TrialFunction(self.disc.space), v)
+        tool = self.tool
         newton = NewtonSolver(self.comm, residual, jacobian, self.w, self.bcs,
                               self.update_material_state, self.scene.solver,
-                              nodal_terms=self.tool.nodal_terms if self.tool else [])
+                              nodal_terms=tool.nodal_terms if tool else [],
+                              border=tool if tool and tool.force_controlled else None)
         if dead is not None:   # loads present from the start set the force scale
             newton.include_force_scale(vector_norm(dead))
         return newton
@@ -118,6 +120,8 @@ class SoilProblem:
 
     def roll_back(self):
         self.w.x.array[:] = self.w_committed.x.array
+        if self.tool is not None:
+            self.tool.roll_back()
 
     def observe(self):
         """(displacement, force) of the driven boundary or tool along the loading direction."""

@@ -1,10 +1,14 @@
 """The rigid tool: its motion, how it acts on the soil, and the force the soil exerts on it.
 
 The tool sits in a cavity of the soil mesh and translates as a rigid body
-along the loading direction; the load factor prescribes its travel
-(displacement control). It acts on the cavity's faces either bonded (the
-faces move with it: Dirichlet conditions) or through the Mohr–Coulomb
-penalty interface (``interface.rigid_tool``: stick, slip, separation).
+along the loading direction. Under displacement control the load factor
+prescribes its travel; under force control it prescribes the draft, and the
+travel a is one more unknown of the Newton system with the equation
+draft(u, a) = F (the tool is its :class:`~soilbin.solver.newton.NewtonSolver`
+border). It acts on the cavity's faces either bonded (the faces move with
+it: Dirichlet conditions; displacement control only) or through the
+Mohr–Coulomb penalty interface (``interface.rigid_tool``: stick, slip,
+separation).
 
 :meth:`RigidTool.force` is the one measurement of the force between tool and
 soil, read from the tool's own action on the soil: the sum of the interface
@@ -22,6 +26,7 @@ from petsc4py import PETSc
 from dolfinx import fem
 
 from ..interface.rigid_tool import RigidToolContact
+from ..scene import Control
 from .loads import area_of, assemble_total, facets, probe
 
 
@@ -33,7 +38,9 @@ class RigidTool:
         self.direction = frame.vector(loading.direction)
         self._magnitude = loading.magnitude
         self._incremental = kinematics.incremental
-        self._factor = self._committed_factor = 0.0
+        self.force_controlled = loading.control is Control.FORCE
+        self.travel = self._committed_travel = 0.0   # along the loading direction
+        self._target = 0.0                            # the draft, under force control
         self.bcs, self._moving = [], []   # bonded faces: (Constant, component of the travel)
         self.interface = None
         if tool.bonded:
@@ -63,18 +70,34 @@ class RigidTool:
         """A bonded tool reads its reaction from the soil's residual without its own terms."""
         self._resultant = [fem.form(ufl.replace(soil_residual, {self._v: p})) for p in self._probes]
 
-    @property
-    def travel(self):
-        """Displacement of the tool along the loading direction."""
-        return self._factor * self._magnitude
-
     def set_factor(self, factor):
-        self._factor = factor
+        """The travel (displacement control) or the draft (force control) at this factor."""
+        if self.force_controlled:
+            self._target = factor * self._magnitude
+        else:
+            self.set_value(factor * self._magnitude)
+
+    def set_value(self, travel):
+        """Place the tool at this travel."""
+        self.travel = travel
         if self.interface is not None:
-            self.interface.tool_displacement = self.travel * self.direction
-        base = self._committed_factor if self._incremental else 0.0
+            self.interface.tool_displacement = travel * self.direction
+        base = self._committed_travel if self._incremental else 0.0
         for value, component in self._moving:
-            value.value = (factor - base) * self._magnitude * component
+            value.value = (travel - base) * component
+
+    # -- the travel as a Newton unknown (force control) ---------------------------------
+    @property
+    def value(self):
+        return self.travel
+
+    def residual(self):
+        """The draft's balance, draft − F (collective)."""
+        return self.draft() - self._target
+
+    def linearise(self, b, c):
+        """∂(soil residual)/∂a into b, ∂(draft)/∂u into c; returns ∂(draft)/∂a."""
+        return self.interface.travel_derivatives(self.direction, b, c)
 
     def update(self):
         """The interface law at the current iterate (nothing for a bonded tool)."""
@@ -82,9 +105,12 @@ class RigidTool:
             self.interface.update()
 
     def commit(self):
-        self._committed_factor = self._factor
+        self._committed_travel = self.travel
         if self.interface is not None:
             self.interface.commit()
+
+    def roll_back(self):
+        self.set_value(self._committed_travel)
 
     @property
     def area(self):
@@ -98,9 +124,13 @@ class RigidTool:
         local = np.array([fem.assemble_scalar(form) for form in self._resultant])
         return self._resultant[0].mesh.comm.allreduce(local, op=MPI.SUM)
 
+    def draft(self):
+        """The force on the soil along the travel; collective."""
+        return float(self.force() @ self.direction)
+
     def observe(self):
-        """(travel, draft): the draft is the force on the soil along the travel."""
-        return self.travel, float(self.force() @ self.direction)
+        """(travel, draft)."""
+        return self.travel, self.draft()
 
     def gap(self):
         """(reference coordinates (n, 3), gap (n,)) at the interface's contact points."""

@@ -1,14 +1,21 @@
-"""Newton's method for one load step: PETSc SNES (newtonls) with a MUMPS LU solve.
+"""Newton's method for one load step, with a MUMPS LU solve per iterate.
 
-The residual callback runs the constitutive update once per iterate; the
-Jacobian callback, called by SNES at the same iterate, reuses its tangent.
-Convergence is tested on the residual norm, relative to the step's initial
-residual or, as a floor, to the run's force scale (the largest initial
-residual seen so far), so that a step that starts near equilibrium does not
-chase round-off. A diverged or failed solve raises :class:`NewtonFailure`,
-which the load stepper turns into a step cut.
+The residual evaluation runs the constitutive update once per iterate; the
+Jacobian, assembled at the same iterate, reuses its tangent. Convergence is
+tested on the residual norm, relative to the step's initial residual or, as
+a floor, to the run's force scale (the largest initial residual seen so
+far), so that a step that starts near equilibrium does not chase round-off.
+A diverged or failed solve raises :class:`NewtonFailure`, which the load
+stepper turns into a step cut.
+
+A *border* adds one global scalar unknown a and its equation g(w, a) = 0
+to the system (the travel of a force-controlled tool and its force
+balance). The bordered Newton system [K b; cᵀ d] [Δw; Δa] = −[R; g] is
+solved by block elimination with the one factorisation of K:
+K x = −R, K z = b, Δa = (−g − c·x) / (d − c·z), Δw = x − z Δa.
 """
 import dataclasses
+import math
 
 import numpy as np
 from petsc4py import PETSc
@@ -16,6 +23,7 @@ from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401  (registers fem.petsc)
 
 from ..errors import ConvergenceError, ReturnMapError
+from ..scene import LineSearch
 
 
 class NewtonFailure(ConvergenceError):
@@ -28,60 +36,55 @@ class NewtonResult:
     residuals: tuple  # residual norm at each iterate, the initial one first
 
 
-_REASONS = {-3: "linear solve failed", -4: "residual is not a number",
-            -5: "iteration limit reached", -6: "line search failed"}
+#: Halvings of the step a backtracking line search tries before taking the shortest.
+MAX_BACKTRACKS = 6
 
 
 class NewtonSolver:
     def __init__(self, comm, residual, jacobian, w, bcs, before_residual, options, prefix="soil_",
-                 nodal_terms=()):
+                 nodal_terms=(), border=None):
         """``before_residual()`` runs after ``w`` is set to an iterate, before assembly;
-        ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``)."""
+        ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``);
+        ``border``, if given, carries the extra scalar unknown (see the module docstring):
+        ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d, ``move(da)``,
+        ``value``/``set_value(a)``."""
         self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
         self._nodal_terms = tuple(nodal_terms)
+        self._border = border
         self._opts = options
         self._b = fem.petsc.create_vector(self._L)
-        self._A = fem.petsc.create_matrix(self._a)
-        self._x = w.vector.duplicate()
+        self.matrix = fem.petsc.create_matrix(self._a)
+        self._dx = w.vector.duplicate()
         self._gap = w.vector.duplicate()
         self._force_scale = 0.0
-        self._error = None
-        self._residuals = []
 
-        snes = PETSc.SNES().create(comm)
-        snes.setOptionsPrefix(prefix)
+        self._ksp = ksp = PETSc.KSP().create(comm)
+        ksp.setOptionsPrefix(prefix)
         petsc = PETSc.Options(prefix)
-        for key, value in {"snes_type": "newtonls", "snes_linesearch_type": options.line_search.value,
-                           "snes_max_it": options.max_iterations,
-                           "ksp_type": "preonly", "pc_type": "lu",
+        for key, value in {"ksp_type": "preonly", "pc_type": "lu",
                            "pc_factor_mat_solver_type": "mumps",
                            # null pivots (e.g. soil yielded at the apex, zero tangent) are
                            # detected and their solution components set to zero, not an abort
                            "mat_mumps_icntl_24": 1}.items():
             petsc[key] = value
-        snes.setFromOptions()
-        snes.setFunction(self._F, self._b)
-        snes.setJacobian(self._J, self._A)
-        snes.setConvergenceTest(self._converged)
-        self._snes = snes
+        ksp.setOperators(self.matrix)
+        ksp.setFromOptions()
+        if border is not None:
+            self._border_b, self._border_c = w.vector.duplicate(), w.vector.duplicate()
+            self._border_z = w.vector.duplicate()
 
     def include_force_scale(self, norm):
         """Make the residual floor relative to at least this force norm (e.g. of dead loads)."""
         self._force_scale = max(self._force_scale, norm)
 
-    def _F(self, snes, x, b):
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        x.copy(self._w.vector)
-        self._w.x.scatter_forward()
+    def residual(self, b):
+        """Assemble the residual at the current ``w`` into ``b``; returns its norm (with the
+        border's equation). Raises ReturnMapError from the constitutive update."""
+        x = self._w.vector
         with b.localForm() as b_local:
             b_local.set(0.0)
-        try:
-            self._before()
-        except ReturnMapError as err:   # PETSc cannot carry it: stop SNES with a NaN
-            self._error = err
-            b.set(np.nan)
-            return
+        self._before()
         fem.petsc.assemble_vector(b, self._L)
         if self._bc_mismatch(x):   # first iterate of a displacement step: lift g - x
             fem.petsc.apply_lifting(b, [self._a], bcs=[self._bcs], x0=[x], scale=-1.0)
@@ -89,6 +92,10 @@ class NewtonSolver:
         for term in self._nodal_terms:
             term.add_residual(b)
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
+        norm = b.norm()
+        if self._border is not None:
+            norm = math.hypot(norm, self._border.residual())
+        return norm
 
     def _bc_mismatch(self, x):
         """Whether x misses a prescribed value (else the lifting term is zero)."""
@@ -97,7 +104,8 @@ class NewtonSolver:
         fem.petsc.set_bc(self._gap, self._bcs, x, 1.0)
         return self._gap.norm(PETSc.NormType.NORM_INFINITY) > 0.0
 
-    def _J(self, snes, x, A, P):
+    def jacobian(self, A):
+        """Assemble the Jacobian at the current iterate (after :meth:`residual`) into ``A``."""
         A.zeroEntries()
         fem.petsc.assemble_matrix(A, self._a, bcs=self._bcs)
         if self._nodal_terms:   # the BC diagonal was inserted: flush before adding
@@ -106,35 +114,77 @@ class NewtonSolver:
             term.add_jacobian(A)
         A.assemble()
 
-    def _converged(self, snes, it, norms):
-        fnorm = norms[2]
-        self._residuals.append(fnorm)
-        if not np.isfinite(fnorm):
-            return PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN
-        if it == 0:
-            self._force_scale = max(self._force_scale, fnorm)
-        target = max(self._opts.rtol * self._residuals[0], self._opts.atol * self._force_scale)
-        if fnorm <= target:
-            return PETSc.SNES.ConvergedReason.CONVERGED_FNORM_ABS if it else \
-                PETSc.SNES.ConvergedReason.CONVERGED_ITS
-        if it >= self._opts.max_iterations:
-            return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
-        return PETSc.SNES.ConvergedReason.ITERATING
+    def _converged(self, residuals):
+        if residuals[0] > 0.0 and len(residuals) == 1:
+            self._force_scale = max(self._force_scale, residuals[0])
+        target = max(self._opts.rtol * residuals[0], self._opts.atol * self._force_scale)
+        return residuals[-1] <= target
+
+    def _newton_step(self):
+        """Solve for the Newton correction into ``self._dx`` (and the border's Δa)."""
+        self.jacobian(self.matrix)
+        self._ksp.setOperators(self.matrix)
+        self._b.scale(-1.0)
+        self._linear_solve(self._b, self._dx)
+        if self._border is None:
+            return 0.0
+        b, c, z = self._border_b, self._border_c, self._border_z
+        d = self._border.linearise(b, c)
+        self._linear_solve(b, z)
+        da = (-self._border.residual() - c.dot(self._dx)) / (d - c.dot(z))
+        self._dx.axpy(-da, z)
+        return da
+
+    def _linear_solve(self, rhs, x):
+        try:
+            self._ksp.solve(rhs, x)
+        except PETSc.Error as err:   # e.g. MUMPS failing on a singular tangent
+            raise NewtonFailure(f"the linear solve failed (PETSc error {err.ierr})") from None
+        if self._ksp.getConvergedReason() < 0:
+            raise NewtonFailure("the linear solve failed (factorisation)")
+
+    def _set_iterate(self, x, a, dx, da, step):
+        """w = x + step dx (and a + step da)."""
+        self._w.vector.waxpy(step, dx, x)
+        self._w.x.scatter_forward()
+        if self._border is not None:
+            self._border.set_value(a + step * da)
 
     def solve(self):
         """Newton from the current ``w``; on success ``w`` holds the solution."""
-        self._residuals, self._error = [], None
-        self._w.vector.copy(self._x)
+        residuals = []
+        x = self._w.vector.duplicate()
         try:
-            self._snes.solve(None, self._x)
-        except PETSc.Error as err:   # e.g. MUMPS failing on a singular tangent
-            raise NewtonFailure(f"the linear solve failed (PETSc error {err.ierr})") from None
-        reason = self._snes.getConvergedReason()
-        if self._error is not None:
-            raise NewtonFailure(str(self._error))
-        if reason <= 0:
-            raise NewtonFailure(f"Newton did not converge ({_REASONS.get(reason, reason)}) "
-                                f"after {self._snes.getIterationNumber()} iterations")
-        self._x.copy(self._w.vector)
-        self._w.x.scatter_forward()
-        return NewtonResult(self._snes.getIterationNumber(), tuple(self._residuals))
+            residuals.append(self.residual(self._b))
+            while True:
+                if not np.isfinite(residuals[-1]):
+                    raise NewtonFailure(f"Newton did not converge (residual is not a number) "
+                                        f"after {len(residuals) - 1} iterations")
+                if self._converged(residuals):
+                    return NewtonResult(len(residuals) - 1, tuple(residuals))
+                if len(residuals) > self._opts.max_iterations:
+                    raise NewtonFailure(f"Newton did not converge (iteration limit reached) "
+                                        f"after {len(residuals) - 1} iterations")
+                da = self._newton_step()
+                self._w.vector.copy(x)
+                a = self._border.value if self._border is not None else 0.0
+                residuals.append(self._line_search(x, a, da, residuals[-1]))
+        except ReturnMapError as err:
+            raise NewtonFailure(str(err)) from None
+        finally:
+            x.destroy()
+
+    def _line_search(self, x, a, da, norm0):
+        """Take the full step, or with backtracking halve it until the residual decreases."""
+        step = 1.0
+        self._set_iterate(x, a, self._dx, da, step)
+        norm = self.residual(self._b)
+        if self._opts.line_search is LineSearch.BASIC:
+            return norm
+        for _ in range(MAX_BACKTRACKS):
+            if np.isfinite(norm) and norm < norm0:
+                break
+            step /= 2.0
+            self._set_iterate(x, a, self._dx, da, step)
+            norm = self.residual(self._b)
+        return norm
