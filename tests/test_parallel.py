@@ -34,3 +34,24 @@ def test_two_ranks_match_serial(tmp_path, scene, overrides):
         assert r2["load_factor"] == pytest.approx(r1["load_factor"], rel=1e-12)
         assert r2["displacement"] == pytest.approx(r1["displacement"], rel=1e-6)
         assert r2["force"] == pytest.approx(r1["force"], rel=1e-6)
+
+
+def test_force_controlled_tine_with_progress_lines_matches_serial(tmp_path):
+    """The tool's bordered Newton and the tool section under two ranks; without --json the
+    progress lines are printed (rank 0 alone must not evaluate a collective for them)."""
+    coarse = ["mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "mesh.behind=10.0",
+              "mesh.bin_width=10.0", "loading.control=force", "loading.magnitude=60",
+              "loading.steps=3"]
+    sets = [arg for key in coarse for arg in ("--set", key)]
+    curves = {}
+    for ranks in (1, 2):
+        out = tmp_path / f"n{ranks}"
+        done = soilbin_cli("run", "tine-2in-90deg", "--out", out, *sets,
+                           mpi_ranks=ranks if ranks > 1 else None)
+        assert done.returncode == 0, done.stderr
+        assert "step   3" in done.stderr and (out / "tool-section.png").is_file()
+        curves[ranks] = curve(out / "curve.csv")
+    for r1, r2 in zip(curves[1], curves[2]):
+        assert r1["force"] == pytest.approx(60.0 * r1["load_factor"], rel=1e-6)
+        assert r2["force"] == pytest.approx(r1["force"], rel=1e-6)
+        assert r2["displacement"] == pytest.approx(r1["displacement"], rel=1e-6)
