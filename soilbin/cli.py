@@ -5,9 +5,13 @@ import argparse
 import json
 import logging
 import sys
+import tempfile
+import traceback
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from .errors import SoilbinError
+from . import interrupt
+from .errors import InputError, SoilbinError
 from .toml_in import SCENES_DIR, read_toml, scene_path
 
 EPILOG = """\
@@ -19,7 +23,10 @@ examples:
 
 exit status: 0 done (a force-controlled run that stops at collapse with
 loading.until_collapse = true counts as done), 1 the run could not reach the
-full load (converged steps are on disk), 2 bad input.
+full load (converged steps are on disk), 2 bad input (the message names the
+file, the key and the accepted range), 3 internal error (one line; the
+traceback is saved to a file it names), 130 / 143 interrupted by SIGINT /
+SIGTERM (summary.json has status "interrupted"; converged steps are on disk).
 """
 
 
@@ -28,13 +35,15 @@ def _parser():
         prog="soilbin", description="Geometric and material nonlinear finite element analysis "
         "of soil-structure interaction (DOLFINx).",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"soilbin {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     run = sub.add_parser("run", help="solve a scene", description=(
         "Solve a scene and write its run folder: scene.toml (resolved), curve.csv (one row per "
         "converged step), summary.json and fields.xdmf (ParaView)."),
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    run.add_argument("scene", help="scene file, or the name of a scene in scenes/ (see 'soilbin list')")
+    run.add_argument("scene", help="scene file, or the name of a scene in scenes/ (see 'soilbin "
+                     "list'); 'soilbin keys SCENE' lists every key it takes")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene value, e.g. materials.soil.E=5000 (repeatable); "
                           "checked like the file")
@@ -44,6 +53,12 @@ def _parser():
 
     sub.add_parser("list", help="list the scenes in scenes/ with their titles",
                    description="List the scenes shipped in the project's scenes/ folder.")
+    keys = sub.add_parser("keys", help="list every key of a scene with its value, range and "
+                          "meaning", description="List every key a scene takes (the keys of "
+                          "--set), with its value in the scene, its accepted range and its meaning.")
+    keys.add_argument("scene", help="scene file, or the name of a scene in scenes/")
+    keys.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                      help="override a scene value first (repeatable)")
     _point_parser(sub)
     from .study import add_parser as add_study_parser
     add_study_parser(sub)
@@ -104,6 +119,20 @@ def _point_parser(sub):
                        help="the last stdout line is the summary as one JSON object")
 
 
+def _version():
+    try:
+        return version("soilbin")
+    except PackageNotFoundError:
+        return "(not installed)"
+
+
+def _keys(args):
+    from .keys import format_keys
+    from .scene import load_scene
+    print("\n".join(format_keys(load_scene(scene_path(args.scene), args.overrides))))
+    return 0
+
+
 def _list_scenes(args):
     for path in sorted(SCENES_DIR.glob("*.toml"), key=lambda p: p.stem):
         title = read_toml(path).get("title", "")
@@ -120,17 +149,26 @@ def _progress(record, area):
 
 
 def _run(args):
-    import dolfinx  # noqa: F401  (configures logging; then quieten the JIT's INFO lines)
-    logging.getLogger().setLevel(logging.WARNING)
     from mpi4py import MPI
     from .scene import load_scene
     from .run import run_scene
 
     scene = load_scene(scene_path(args.scene), args.overrides)
     out = args.out or Path("runs") / scene.name
-    rank0 = MPI.COMM_WORLD.rank == 0
-    summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress,
-                        overrides=args.overrides)
+    comm = MPI.COMM_WORLD
+    rank0 = comm.rank == 0
+    try:
+        summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress,
+                            overrides=args.overrides)
+    except (InputError, interrupt.Interrupted):
+        raise   # every rank raises these alike
+    except Exception as err:
+        if comm.size == 1:
+            raise
+        # one rank failing alone would leave the others in a collective for ever
+        print(f"soilbin: internal error on rank {comm.rank}: {_one_line(err)}; traceback in "
+              f"{_save_traceback(out, comm.rank)}", file=sys.stderr, flush=True)
+        comm.Abort(INTERNAL_ERROR)
     if rank0:
         if args.json:
             print(json.dumps(summary))
@@ -142,6 +180,8 @@ def _run(args):
                 print(f"{key} = {summary[key]}")
         if summary["message"]:
             print(f"soilbin: {summary['message']}", file=sys.stderr)
+    if "exit_status" in summary:
+        return summary["exit_status"]
     return 0 if summary["converged"] else 1
 
 
@@ -179,15 +219,61 @@ def _study(args):
     return study_command(args)
 
 
+#: Exit status of an error that is a bug, not bad input.
+INTERNAL_ERROR = 3
+
+
+def _quiet_logging():
+    """Warnings and errors only, also while the JIT compiles (cffi sets the root logger's
+    level to 0 for that; a handler's own level holds)."""
+    logging.basicConfig(level=logging.WARNING)
+    for handler in logging.getLogger().handlers:
+        handler.setLevel(logging.WARNING)
+
+
+def _one_line(err):
+    return f"{type(err).__name__}: {' '.join(str(err).split())}"
+
+
+def _save_traceback(out=None, rank=0):
+    """Write the current exception's traceback to OUT/traceback.txt (else a temporary file)."""
+    name = "traceback.txt" if rank == 0 else f"traceback-rank{rank}.txt"
+    places = [Path(out) / name] if out else []
+    places.append(Path(tempfile.gettempdir()) / f"soilbin-{os.getpid()}-{name}")
+    for path in places:
+        try:
+            path.write_text(traceback.format_exc())
+            return path
+        except OSError:
+            continue
+    return "(not saved: no writable folder)"
+
+
+def _rank0():
+    mpi = sys.modules.get("mpi4py.MPI")
+    return mpi is None or mpi.COMM_WORLD.rank == 0
+
+
 def main(argv=None):
+    _quiet_logging()
     args = _parser().parse_args(argv)
-    command = {"run": _run, "list": _list_scenes, "point": _point,
+    command = {"run": _run, "list": _list_scenes, "point": _point, "keys": _keys,
                "study": _study}[args.command]   # only run loads DOLFINx
-    try:
-        return command(args)
-    except SoilbinError as err:
-        print(f"soilbin: error: {err}", file=sys.stderr)
-        return 2
+    with interrupt.handlers():
+        try:
+            return command(args)
+        except SoilbinError as err:
+            if _rank0():
+                print(f"soilbin: error: {err}", file=sys.stderr)
+            return 2
+        except interrupt.Interrupted as signal:
+            if _rank0():
+                print(f"soilbin: {signal}", file=sys.stderr)
+            return signal.exit_status
+        except Exception as err:
+            print(f"soilbin: internal error: {_one_line(err)}; traceback in "
+                  f"{_save_traceback(getattr(args, 'out', None))}", file=sys.stderr)
+            return INTERNAL_ERROR
 
 
 if __name__ == "__main__":

@@ -1,79 +1,169 @@
-"""The run folder: resolved scene, curve.csv, summary.json and XDMF fields.
+"""The run folder: resolved scene, curve.csv, summary.json and the XDMF fields.
 
-Rows and fields are written as each step converges, so a run that stops
-early keeps everything it reached.
+Rows and fields are written as each step converges, each file complete before
+the next step starts (a signal waits for the write to end), so a run that
+stops early, or is killed, keeps everything it reached, readable.
 """
 import csv
+import dataclasses
 import json
 from pathlib import Path
 
-from dolfinx import io
+import numpy as np
+from dolfinx.cpp.io import perm_vtk
+from dolfinx.cpp.mesh import entities_to_geometry
+from dolfinx.mesh import CellType
+
+from .interrupt import deferred
+from .scene import TOOL
+from .xdmf import XdmfSeries
 
 CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure",
                  "newton_iterations", "cuts", "wall_s")
 
+#: Written into fields.xdmf and tool.xdmf (XML Information and HDF5 attributes).
+CONVENTIONS = {
+    "time": "the load factor (0: the initial state, 1: the full load)",
+    "mesh": "the initial configuration; warp it by 'displacement' to see the deformed one",
+    "displacement": "total displacement from the initial configuration [length]",
+    "stress": "Cauchy stress, cell average, tension positive (compression negative) "
+              "[force/area]",
+    "plastic_strain": "equivalent plastic strain, cell average (0 where elastic)",
+    "gap": "opening between soil and tool at the contact nodes, >= 0 [length]",
+}
+
+
+def _text(value):
+    return f"{value:.10g}" if isinstance(value, float) else value
+
+
+def _gather(comm, array):
+    parts = comm.gather(np.ascontiguousarray(array), root=0)
+    return np.concatenate(parts) if comm.rank == 0 else None
+
+
+class MeshData:
+    """The soil mesh as one process writes it: the nodes of the P1 displacement space in
+    global order, the hexahedra (VTK node order), and any field's node or cell values."""
+
+    def __init__(self, point_space):
+        mesh = point_space.mesh
+        self.comm = mesh.comm
+        imap = point_space.dofmap.index_map
+        self._owned = imap.size_local
+        self._n_cells = mesh.topology.index_map(3).size_local
+        self._cell_nodes = point_space.dofmap.list.array.reshape(
+            -1, point_space.dofmap.cell_dofs(0).size)
+        cells = imap.local_to_global(self._cell_nodes[:self._n_cells].ravel())
+        perm = perm_vtk(CellType.hexahedron, self._cell_nodes.shape[1])
+        self.points = _gather(self.comm, point_space.tabulate_dof_coordinates()[:self._owned])
+        self.cells = _gather(self.comm, cells.reshape(-1, self._cell_nodes.shape[1])[:, perm])
+
+    def values(self, function):
+        """(True, node values) of a Lagrange field, (False, cell values) of a DG0 one."""
+        space = function.function_space
+        bs = space.dofmap.index_map_bs
+        local = function.x.array.reshape(-1, bs)
+        dofs = space.dofmap.list.array.reshape(len(self._cell_nodes), -1)
+        if space.ufl_element().degree() == 0:
+            values, on_nodes = local[dofs[:self._n_cells, 0]], False
+        else:   # the vertex dofs come first in every Lagrange cell
+            where = np.empty(self._cell_nodes.max() + 1, dtype=np.int64)
+            where[self._cell_nodes] = dofs[:, :self._cell_nodes.shape[1]]
+            values, on_nodes = local[where[:self._owned]], True
+        gathered = _gather(self.comm, values)
+        return on_nodes, (gathered if gathered is None or bs > 1 else gathered[:, 0])
+
+
+def tool_surface(problem):
+    """(points, quadrilaterals) of the cavity faces the tool acts on, initial geometry."""
+    mesh, tagged = problem.mesh, problem.tagged
+    owned = mesh.topology.index_map(2).size_local
+    facets = np.concatenate([tagged.facet_tags.find(tagged.boundaries[face])
+                             for face in problem.scene.tool.faces])
+    facets = np.unique(facets[facets < owned]).astype(np.int32)
+    nodes = entities_to_geometry(mesh, 2, facets, False)
+    corners = _gather(mesh.comm, mesh.geometry.x[nodes.ravel()].reshape(-1, 3))
+    if corners is None:
+        return None, None
+    quads = np.arange(len(corners)).reshape(-1, 4)[:, perm_vtk(CellType.quadrilateral, 4)]
+    return corners, quads
+
 
 class FieldWriter:
-    """XDMF time series of the problem's named output fields."""
+    """fields.xdmf (the soil's named output fields) and, with a tool, tool.xdmf (its faces,
+    displaced rigidly); frame 0 is the initial state. Rank 0 writes."""
 
-    def __init__(self, path, problem, fields):
-        mesh = problem.mesh
-        self._xdmf = io.XDMFFile(mesh.comm, str(path), "w")
-        self._xdmf.write_mesh(mesh)
-        # Large deformation moves the mesh: fields are written on the initial
-        # mesh, with the total displacement to warp it by in ParaView.
-        self._x = mesh.geometry.x
-        self._reference_x = self._x.copy() if problem.moves_mesh else None
-        self._fields = list(problem.output_fields(fields).values())
+    def __init__(self, folder, problem, fields):
+        self._fields = problem.output_fields(fields)
+        self._mesh = MeshData(problem.displacement().function_space)
+        rank0 = problem.comm.rank == 0
+        self._soil = (XdmfSeries(folder / "fields.xdmf", self._mesh.points, self._mesh.cells,
+                                 "Hexahedron", CONVENTIONS) if rank0 else None)
+        self._tool, self._direction = None, None
+        if problem.tool is not None:
+            points, quads = tool_surface(problem)
+            self._direction = np.asarray(problem.tool.direction, dtype=float)
+            if rank0:
+                self._tool = XdmfSeries(folder / "tool.xdmf", points, quads, "Quadrilateral",
+                                        CONVENTIONS)
+        self.last = None   # (points, cells, point data, cell data) of the last frame, rank 0
 
-    def write(self, t):
-        for _, update in self._fields:
+    def write(self, t, tool_travel=0.0):
+        point_data, cell_data = {}, {}
+        for name, (function, update) in self._fields.items():
             update()
-        if self._reference_x is not None:
-            current = self._x.copy()
-            self._x[:] = self._reference_x
-        for function, _ in self._fields:
-            self._xdmf.write_function(function, t)
-        if self._reference_x is not None:
-            self._x[:] = current
-
-    def close(self):
-        self._xdmf.close()
+            on_nodes, values = self._mesh.values(function)
+            (point_data if on_nodes else cell_data)[name.value] = values
+        if self._soil is None:
+            return
+        with deferred():
+            self._soil.write(t, point_data, cell_data)
+            if self._tool is not None:
+                self._tool.write(t, {"displacement": np.tile(tool_travel * self._direction,
+                                                             (self._tool.n_points, 1))}, {})
+        self.last = (self._mesh.points, self._mesh.cells, point_data, cell_data)
 
 
 class RunFolder:
-    """One folder per run. Only rank 0 writes the text files."""
+    """One folder per run (made and cleared beforehand: :mod:`soilbin.outdir`). Only rank 0
+    writes files; writing fields is collective."""
 
     def __init__(self, path, problem, scene):
         self.path = Path(path)
         self._rank0 = problem.comm.rank == 0
         if self._rank0:
-            self.path.mkdir(parents=True, exist_ok=True)
             (self.path / "scene.toml").write_text(scene.resolved())
             with open(self.path / "curve.csv", "w", newline="") as f:
                 csv.writer(f).writerow(CURVE_COLUMNS)
         self._area = problem.area
-        self._fields = (FieldWriter(self.path / "fields.xdmf", problem, scene.output.fields)
-                        if scene.output.fields else None)
+        self._moves_tool = scene.loading.boundary == TOOL
+        self.fields = (FieldWriter(self.path, problem, scene.output.fields)
+                       if scene.output.fields else None)
+        if self.fields is not None:
+            self.fields.write(0.0)
         self._every = scene.output.every
-        self._last = None
+        self.records = []   # the converged steps, in order
 
     def add_step(self, record):
+        self.records.append(record)
         if self._rank0:
-            with open(self.path / "curve.csv", "a", newline="") as f:
-                csv.writer(f).writerow([record.step, f"{record.load_factor:.10g}",
-                                        f"{record.displacement:.10g}", f"{record.force:.10g}",
-                                        f"{record.force / self._area:.10g}", record.newton_iterations,
-                                        record.cuts, f"{record.wall_s:.4f}"])
-        if self._fields is not None and record.step % self._every == 0:
-            self._fields.write(record.load_factor)
-        self._last = record
+            values = {**dataclasses.asdict(record), "pressure": record.force / self._area}
+            with deferred(), open(self.path / "curve.csv", "a", newline="") as f:
+                csv.writer(f).writerow([_text(values[column]) for column in CURVE_COLUMNS])
+        if self.fields is not None and record.step % self._every == 0:
+            self._write_fields(record)
 
-    def finish(self, summary):
-        """Fields of the last converged step (if not yet written), summary.json, close."""
-        if self._fields is not None:
-            if self._last is not None and self._last.step % self._every != 0:
-                self._fields.write(self._last.load_factor)
-            self._fields.close()
+    def _write_fields(self, record):
+        self.fields.write(record.load_factor, record.displacement if self._moves_tool else 0.0)
+
+    def finish(self, summary, interrupted=False):
+        """Fields of the last converged step (if not yet written; collective, so not after an
+        interruption), then summary.json."""
+        last = self.records[-1] if self.records else None
+        if (self.fields is not None and not interrupted and last is not None
+                and last.step % self._every != 0):
+            self._write_fields(last)
         if self._rank0:
-            (self.path / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+            with deferred():
+                (self.path / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")

@@ -4,15 +4,15 @@ import time
 
 from mpi4py import MPI
 
-from pathlib import Path
-
 from . import figures
 from .closed_form import narrow_tine_draft
+from .interrupt import Interrupted
 from .meshes import BUILDERS
+from .outdir import prepare_on_rank0
 from .output import RunFolder
 from .problem import SoilProblem
 from .scene import Headline
-from .solver.stepping import run_load_steps
+from .solver.stepping import StepperResult, run_load_steps
 
 
 def headline_results(scene, records, area):
@@ -48,10 +48,12 @@ def draft_estimate(scene):
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
-    """Solve ``scene``, writing into ``out_dir``; returns the summary dict (``overrides``:
-    the --set items the scene was loaded with, echoed in it)."""
+    """Solve ``scene``, writing into ``out_dir`` (checked writable and cleared of an older
+    run before the mesh is built); returns the summary dict (``overrides``: the --set items
+    the scene was loaded with, echoed in it). SIGINT or SIGTERM during the steps ends the
+    run with status "interrupted" (summary written, no collective call after it)."""
     start = time.perf_counter()
-    out_dir = Path(out_dir)
+    out_dir = prepare_on_rank0(comm, out_dir)
     tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
     problem = SoilProblem(scene, tagged)
     folder = RunFolder(out_dir, problem, scene)
@@ -65,8 +67,16 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
             progress(record, area)
 
     loading = scene.loading
-    result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step)
-    if result.complete:
+    interrupted = None
+    try:
+        result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step)
+    except Interrupted as signal:
+        interrupted = signal
+        result = StepperResult(tuple(folder.records), False,
+                               f"{signal}; the converged steps are in {out_dir}")
+    if interrupted is not None:
+        status = "interrupted"
+    elif result.complete:
         status = "complete"
     elif loading.until_collapse and result.steps:
         status = "collapse"
@@ -95,9 +105,12 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     estimate = draft_estimate(scene)
     if estimate is not None:
         summary["draft_estimate"] = dataclasses.asdict(estimate)
-    folder.finish(summary)
+    if interrupted is not None:
+        summary["signal"] = interrupted.name
+        summary["exit_status"] = interrupted.exit_status
+    folder.finish(summary, interrupted=interrupted is not None)
     if records and comm.rank == 0:
         figures.curve_png(records, scene, out_dir / "curve.png", estimate)
-    if records and problem.tool is not None and problem.tool.interface is not None:
+    if interrupted is None and records and problem.tool is not None and problem.tool.interface is not None:
         figures.tool_section_png(problem, out_dir / "tool-section.png")
     return summary

@@ -1,0 +1,45 @@
+"""The run folder on disk, before a run: made, checked writable, cleared of an older run.
+
+No FEniCSx here: the command line checks ``--out`` before any mesh is built.
+Only the files a run writes are removed (:data:`RUN_FILES`); anything else a
+user keeps in the folder stays.
+"""
+import shutil
+from pathlib import Path
+
+from .errors import InputError
+
+#: What ``soilbin run`` writes into its folder (files, and the folder of field frames).
+RUN_FILES = ("scene.toml", "curve.csv", "curve.png", "summary.json", "fields.xdmf", "fields.h5",
+             "tool.xdmf", "tool-section.png", "soil-3d.png", "traceback.txt")
+FRAMES_DIR = "fields"
+
+
+def prepare(path):
+    """Make ``path``, check that it takes files, and remove an older run's files."""
+    path = Path(path)
+    probe = path / ".soilbin-write-test"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe.write_text("")
+        probe.unlink()
+    except OSError as err:
+        raise InputError(f"--out {path}: cannot write there ({err.strerror or err})") from None
+    for name in RUN_FILES:
+        (path / name).unlink(missing_ok=True)
+    shutil.rmtree(path / FRAMES_DIR, ignore_errors=True)
+    return path
+
+
+def prepare_on_rank0(comm, path):
+    """:func:`prepare` on rank 0; every rank raises its InputError (no rank is left waiting)."""
+    error = None
+    if comm.rank == 0:
+        try:
+            prepare(path)
+        except InputError as err:
+            error = str(err)
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise InputError(error)
+    return Path(path)
