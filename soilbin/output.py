@@ -82,7 +82,7 @@ def tool_surface(problem):
     facets = np.concatenate([tagged.facet_tags.find(tagged.boundaries[face])
                              for face in problem.scene.tool.faces])
     facets = np.unique(facets[facets < owned]).astype(np.int32)
-    nodes = entities_to_geometry(mesh, 2, facets, False)
+    nodes = entities_to_geometry(mesh._mesh, 2, facets, False)   # 0.5: the C++ mesh
     corners = _gather(mesh.comm, mesh.geometry.x[nodes.ravel()].reshape(-1, 3))
     if corners is None:
         return None, None

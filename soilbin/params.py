@@ -118,12 +118,13 @@ def from_table(cls, table, where):
     unknown = sorted(set(table) - set(fields))
     if unknown:
         raise InputError(f"{where}: unknown key {unknown[0]!r}; accepted keys: {', '.join(fields)}")
-    kwargs = {}
-    for name, f in fields.items():
-        if name in table:
-            kwargs[name] = _coerce(table[name], hints[name], f"{where}.{name}")
-        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
-            raise InputError(f"{where}: missing key {name!r}")
+    missing = [name for name, f in fields.items() if name not in table
+               and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    if missing:
+        raise InputError(f"{where}: missing key{'s' if len(missing) > 1 else ''} "
+                         f"{', '.join(map(repr, missing))}")
+    kwargs = {name: _coerce(table[name], hints[name], f"{where}.{name}")
+              for name in fields if name in table}
     try:
         return cls(**kwargs)
     except InputError as err:

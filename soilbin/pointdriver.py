@@ -94,6 +94,19 @@ def build_path(name, table):
     return from_table(PATHS[name], table, "path")
 
 
+def _both(*builds):
+    """The results of every build, or one InputError naming all their problems at once."""
+    results, errors = [], []
+    for build in builds:
+        try:
+            results.append(build())
+        except InputError as err:
+            errors.append(str(err))
+    if errors:
+        raise InputError("; ".join(errors))
+    return results
+
+
 # --------------------------------------------------------------------------- driver
 
 @dataclasses.dataclass
@@ -341,8 +354,8 @@ def run_point(model_name, model_table, path_name, path_table, out=None, material
     ``out`` (when given); returns the summary. ``material`` (``SCENE.toml:NAME``)
     only labels the output and the error messages."""
     start = time.perf_counter()
-    model = build_model(model_name, model_table, material)
-    path_params = build_path(path_name, path_table)
+    model, path_params = _both(lambda: build_model(model_name, model_table, material),
+                               lambda: build_path(path_name, path_table))
     result = drive(model, path_params, path_name)
     summary = summarize(model_name, model, path_name, path_params, result, material)
     if out is not None:

@@ -6,6 +6,7 @@ from mpi4py import MPI
 
 from . import figures
 from .closed_form import narrow_tine_draft
+from .insitu import check_initial_stress
 from .interrupt import Interrupted
 from .meshes import BUILDERS
 from .outdir import prepare_on_rank0
@@ -55,6 +56,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     start = time.perf_counter()
     out_dir = prepare_on_rank0(comm, out_dir)
     tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
+    check_initial_stress(scene, tagged)
     problem = SoilProblem(scene, tagged)
     folder = RunFolder(out_dir, problem, scene)
     setup_s = time.perf_counter() - start
@@ -89,7 +91,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "units": scene.units,
         "overrides": list(overrides),
         "status": status,
-        "converged": status != "failed",
+        "converged": status in ("complete", "collapse"),
         "message": result.message,
         "n_cells": tagged.mesh.topology.index_map(3).size_global,
         "n_dofs": problem.n_dofs,

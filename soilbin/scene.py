@@ -237,6 +237,8 @@ def apply_overrides(raw, overrides):
             elif isinstance(node, list) and part.isdigit() and int(part) < len(node):
                 node = node[int(part)]
             elif isinstance(node, dict) and part in node:
+                if parents[:depth] == ["headline"] and isinstance(node[part], str):
+                    node[part] = {"of": node[part]}   # a headline given by name: {of = name}
                 node = node[part]
             else:
                 raise InputError(f"--set {key}: the scene has no table {'.'.join(parents[:depth + 1])!r}")
@@ -328,12 +330,13 @@ def _parse(raw, path):
         _choice(name, where, builder.boundaries,
                 f"mesh builder {builder_name!r} has no such boundary; its boundaries")
 
+    analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
+    _check_held(supports, loading, analysis, tool)
     headline = {}
     for key, value in _optional(raw, "headline", dict).items():
         spec = value if isinstance(value, dict) else {"of": value}
         headline[key] = from_table(HeadlineResult, spec, f"headline.{key}")
 
-    analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
     geostatic = None
     if "geostatic" in raw:
         if any(analysis.frame_rotation):
@@ -345,6 +348,24 @@ def _parse(raw, path):
                  analysis=analysis, solver=from_table(Solver, raw.get("solver", {}), "solver"),
                  output=from_table(Output, raw.get("output", {}), "output"),
                  headline=headline, tool=tool, tractions=tractions, geostatic=geostatic)
+
+
+def _check_held(supports, loading, analysis, tool):
+    """Every displacement component held somewhere (a support, plane strain, a prescribed
+    displacement, or the tool in its cavity); else the body moves as a rigid body, the
+    stiffness matrix is singular and the solver would return noise as a result."""
+    if tool is not None:
+        return
+    held = {axis for s in supports for axis in s.fix}
+    if analysis.plane_strain:
+        held.add("y")
+    if loading.control is Control.DISPLACEMENT:
+        held.add(AXES[loading.direction.axis])
+    free = [axis for axis in AXES if axis not in held]
+    if free:
+        raise InputError(f"supports: nothing holds the {', '.join(free)} displacement, so the body "
+                         "can move as a rigid body (the stiffness matrix is singular); add a "
+                         f"[[supports]] table with fix = {free!r} on some boundary")
 
 
 def _tool(raw, builder):

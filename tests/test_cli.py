@@ -1,6 +1,8 @@
 """The command line: bad input is a short message and exit status 2, never a traceback."""
 import json
 
+import meshio
+import numpy as np
 import pytest
 
 from soilbin.cli import main
@@ -81,7 +83,14 @@ def test_installed_command_json_summary_and_run_folder(tmp_path):
     # the resolved scene runs again as it is
     again = soilbin_cli("run", tmp_path / "col" / "scene.toml", "--json", "--out", tmp_path / "again")
     assert last_json(again.stdout)["top_settlement"] == summary["top_settlement"]
-    assert (tmp_path / "col" / "fields.xdmf").exists() and (tmp_path / "col" / "fields.h5").exists()
+    reader = meshio.xdmf.TimeSeriesReader(str(tmp_path / "col" / "fields.xdmf"))
+    points, cells = reader.read_points_cells()
+    assert reader.num_steps == 1 + summary["n_steps"] and cells[0].type == "hexahedron"
+    t, point_data, cell_data = reader.read_data(reader.num_steps - 1)
+    top = np.isclose(points[:, 2], points[:, 2].max())
+    assert t == pytest.approx(1.0) and point_data["displacement"][top, 2] == pytest.approx(
+        -summary["top_settlement"], rel=1e-8)
+    assert cell_data["stress"][0][:, 8] == pytest.approx(-summary["pressure"], rel=1e-8)
 
 
 def test_installed_command_bad_input_has_no_traceback():
