@@ -22,9 +22,12 @@ setup: system $(STAMP)
 system:
 	@sh scripts/install-system.sh
 
+# pip may add what Debian lacks (pyvista, vtk; for the tests hypothesis, meshio), with
+# numpy held at Debian's (DOLFINx is built against it).
 $(STAMP): pyproject.toml
 	/usr/bin/python3 -m venv --system-site-packages $(VENV)
-	$(PY) -m pip install --quiet --no-build-isolation --no-deps -e .
+	/usr/bin/python3 -c "import numpy; print('numpy==' + numpy.__version__)" > $(VENV)/constraints.txt
+	$(PY) -m pip install --quiet --no-build-isolation -c $(VENV)/constraints.txt -e ".[test]"
 	touch $@
 
 clean:

@@ -2,8 +2,10 @@
 # Installs the Debian packages soilbin runs on, if any is missing (idempotent).
 # OpenBLAS: MUMPS is about 10x slower on the reference BLAS.
 set -e
+# h5py: Debian's, built on the HDF5 that DOLFINx loads (the field frames are written with it).
+# libegl1 libegl-mesa0: pyvista draws off screen through EGL (no X server).
 PKGS="python3-dolfinx python3-gmsh python3-scipy python3-pytest python3-matplotlib \
-python3-venv python3-pip python3-setuptools python3-wheel libopenblas0-pthread \
+python3-h5py python3-venv python3-pip python3-setuptools python3-wheel libopenblas0-pthread \
 openmpi-bin libegl1 libegl-mesa0"
 missing=""
 for p in $PKGS; do

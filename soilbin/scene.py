@@ -304,7 +304,7 @@ def _parse(raw, path):
     for region, material in regions.items():
         _choice(region, f"regions.{region}", builder.regions,
                 f"mesh builder {builder_name!r} has no such region; its regions")
-        _choice(material, f"regions.{region}", materials, "no such material; defined")
+        _choice(material, f"regions.{region}", materials, "no such material; defined in [materials]")
     missing = [r for r in builder.regions if r not in regions]
     if missing:
         raise InputError(f"regions: no material for region {missing[0]!r}")
@@ -363,9 +363,10 @@ def _check_held(supports, loading, analysis, tool):
         held.add(AXES[loading.direction.axis])
     free = [axis for axis in AXES if axis not in held]
     if free:
-        raise InputError(f"supports: nothing holds the {', '.join(free)} displacement, so the body "
-                         "can move as a rigid body (the stiffness matrix is singular); add a "
-                         f"[[supports]] table with fix = {free!r} on some boundary")
+        raise InputError(f"supports: nothing holds the {', '.join(free)} displacement (no "
+                         "support, analysis.plane_strain or loading under displacement control), "
+                         "so the body can move as a rigid body (the stiffness matrix is singular); "
+                         f"add a [[supports]] table with fix = {free!r} on some boundary")
 
 
 def _tool(raw, builder):
@@ -381,8 +382,12 @@ def _tool(raw, builder):
 
 def load_scene(path, overrides=()):
     """Read, override and validate a scene; every error names the file and the key."""
+    return scene_from_table(read_toml(path), path, overrides)
+
+
+def scene_from_table(raw, path, overrides=()):
+    """The scene of the tables ``raw`` of the file ``path`` (as read by tomllib)."""
     path = Path(path)
-    raw = read_toml(path)
     try:
         return _parse(apply_overrides(raw, overrides), path)
     except InputError as err:

@@ -3,11 +3,14 @@
 Shared by the scene reader (:mod:`soilbin.scene`) and the material-point
 driver (:mod:`soilbin.pointdriver`); every error names the file or the key.
 """
+import re
 import tomllib
 from pathlib import Path
 
 from .errors import InputError
 
+#: A dotted key of --set.
+KEY = re.compile(r"[A-Za-z0-9_-]+(\.[A-Za-z0-9_-]+)*")
 #: The project's scene files.
 SCENES_DIR = Path(__file__).resolve().parent.parent / "scenes"
 
@@ -47,4 +50,6 @@ def assignment(item, expected="dotted.key=value"):
     key = key.strip()
     if not sep or not key:
         raise InputError(f"--set {item!r}: expected {expected}")
+    if not KEY.fullmatch(key):
+        raise InputError(f"--set {item!r}: a key is made of letters, digits, '_', '-' and dots")
     return key, parse_value(text.strip())

@@ -112,7 +112,7 @@ def test_a_run_that_cannot_finish_keeps_its_steps(tmp_path):
 
 
 @pytest.mark.parametrize("override, expected", [
-    ("regions.soil=[1]", "regions.soil = [1]: no such material; defined: soil"),
+    ("regions.soil=[1]", "regions.soil = [1]: no such material; defined in [materials]: soil"),
     ("materials.soil.model={a = 1}", "materials.soil.model = {'a': 1}: unknown material model; known: elastic"),
     ('mesh.builder=["box"]', "mesh.builder = ['box']: unknown mesh builder; known: box"),
     ("headline=5", "headline: expected a table, got 5"),
