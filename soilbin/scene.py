@@ -289,7 +289,9 @@ def _parse(raw, path):
     builder_name = _choice(mesh_table.pop("builder", None), "mesh.builder", BUILDERS,
                            "unknown mesh builder; known")
     builder = BUILDERS[builder_name]
-    mesh = from_table(builder.params, mesh_table, "mesh")
+    mesh = builder.locate(from_table(builder.params, mesh_table, "mesh"), path.parent)
+    region_groups, boundary_groups, contact_groups = builder.groups(mesh)
+    source = builder.label(mesh)
 
     materials = {}
     for name, table in _require(raw, "materials", dict).items():
@@ -302,10 +304,10 @@ def _parse(raw, path):
 
     regions = _require(raw, "regions", dict)
     for region, material in regions.items():
-        _choice(region, f"regions.{region}", builder.regions,
-                f"mesh builder {builder_name!r} has no such region; its regions")
+        _choice(region, f"regions.{region}", region_groups,
+                f"{source} has no such region; its regions")
         _choice(material, f"regions.{region}", materials, "no such material; defined in [materials]")
-    missing = [r for r in builder.regions if r not in regions]
+    missing = [r for r in region_groups if r not in regions]
     if missing:
         raise InputError(f"regions: no material for region {missing[0]!r}")
 
@@ -314,7 +316,7 @@ def _parse(raw, path):
     tractions = tuple(from_table(Traction, t, f"tractions[{i}]")
                       for i, t in enumerate(_optional(raw, "tractions", list)))
     loading = from_table(Loading, _require(raw, "loading", dict), "loading")
-    tool = _tool(raw, builder) if "tool" in raw else None
+    tool = _tool(raw, source, boundary_groups, contact_groups) if "tool" in raw else None
     named = [(f"supports[{i}].boundary", s.boundary) for i, s in enumerate(supports)]
     named += [(f"tractions[{i}].boundary", t.boundary) for i, t in enumerate(tractions)]
     named += [(f"tool.faces[{i}]", face) for i, face in enumerate(tool.faces if tool else ())]
@@ -327,8 +329,7 @@ def _parse(raw, path):
     else:
         named.append(("loading.boundary", loading.boundary))
     for where, name in named:
-        _choice(name, where, builder.boundaries,
-                f"mesh builder {builder_name!r} has no such boundary; its boundaries")
+        _choice(name, where, boundary_groups, f"{source} has no such boundary; its boundaries")
 
     analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
     _check_held(supports, loading, analysis, tool)
@@ -369,14 +370,14 @@ def _check_held(supports, loading, analysis, tool):
                          f"add a [[supports]] table with fix = {free!r} on some boundary")
 
 
-def _tool(raw, builder):
+def _tool(raw, source, boundaries, contact):
     """The [tool] record; its faces default to the mesh builder's contact groups."""
     table = _optional(raw, "tool", dict)
     if "faces" not in table:
-        if not builder.contact:
-            raise InputError(f"tool.faces: required: mesh builder {builder.name!r} declares no "
-                             f"contact groups; its boundaries: {', '.join(builder.boundaries)}")
-        table = {**table, "faces": list(builder.contact)}
+        if not contact:
+            raise InputError(f"tool.faces: required: {source} declares no "
+                             f"contact groups; its boundaries: {', '.join(boundaries)}")
+        table = {**table, "faces": list(contact)}
     return from_table(Tool, table, "tool")
 
 

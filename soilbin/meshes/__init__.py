@@ -7,11 +7,13 @@ its ``*_geometry`` module, imported only by :meth:`.builder.Builder.build`.
 """
 from .box import BOX, BoxParams
 from .builder import Builder
+from .gmsh_file import GMSH_FILE, GmshFileParams
 from .retaining_wall import RETAINING_WALL, RetainingWallParams
 from .soil_bin import SOIL_BIN, SoilBinParams
 from .strip_footing import STRIP_FOOTING, StripFootingParams
 
-BUILDERS: dict[str, Builder] = {b.name: b for b in (BOX, STRIP_FOOTING, SOIL_BIN, RETAINING_WALL)}
+BUILDERS: dict[str, Builder] = {b.name: b for b in (BOX, STRIP_FOOTING, SOIL_BIN, RETAINING_WALL,
+                                                     GMSH_FILE)}
 
 __all__ = ["BUILDERS", "Builder", "BoxParams", "StripFootingParams", "SoilBinParams",
-           "RetainingWallParams"]
+           "RetainingWallParams", "GmshFileParams"]

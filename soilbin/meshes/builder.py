@@ -35,6 +35,18 @@ class Builder:
         if stray:
             raise ValueError(f"builder {self.name!r}: contact groups {sorted(stray)} are not boundaries")
 
+    def locate(self, params, folder):
+        """``params`` with any file they name found relative to ``folder`` (the scene's)."""
+        return params
+
+    def groups(self, params):
+        """(regions, boundaries, contact) of the meshes built with ``params``."""
+        return self.regions, self.boundaries, self.contact
+
+    def label(self, params):
+        """What the scene's messages call the source of the groups."""
+        return f"mesh builder {self.name!r}"
+
     def build(self, params, comm):
         """Mesh with gmsh on rank 0 and distribute over ``comm``: a TaggedMesh."""
         from .tagged import build_tagged_mesh

@@ -10,6 +10,7 @@ from dolfinx.io import gmshio
 from mpi4py import MPI
 
 from ..elements import CELL
+from ..errors import InputError
 
 #: Group name -> gmsh entity tags (volumes for regions, surfaces for boundaries).
 Groups = dict[str, list[int]]
@@ -35,22 +36,34 @@ def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Gr
     declared ``regions`` and ``boundaries``, none empty. Groups are tagged
     1, 2, ... in the declared order, regions first, so no two groups share a tag.
     """
+    def model():
+        gmsh.model.add(name)
+        made_regions, made_boundaries = geometry()
+        return _mesh_hexahedra(_as_declared(name, "regions", regions, made_regions),
+                               _as_declared(name, "boundaries", boundaries, made_boundaries))
+    return distribute(comm, name, model)
+
+
+def distribute(comm: MPI.Comm, name: str, model: Callable[[], tuple[dict, dict]]) -> TaggedMesh:
+    """Run ``model()`` on rank 0 (it makes the meshed gmsh model and returns the tag of each
+    region and boundary) and distribute the mesh. If it fails, every rank raises: an
+    InputError as the same InputError, anything else as a RuntimeError."""
     gmsh.initialize(readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         if comm.rank == 0:
-            groups = None
+            groups, failure = None, (RuntimeError, f"gmsh failed to mesh {name!r} on rank 0")
             try:
-                gmsh.model.add(name)
-                made_regions, made_boundaries = geometry()
-                groups = _mesh_hexahedra(_as_declared(name, "regions", regions, made_regions),
-                                         _as_declared(name, "boundaries", boundaries, made_boundaries))
+                groups = model()
+            except InputError as err:
+                failure = (InputError, str(err))
+                raise
             finally:
-                comm.bcast(groups, root=0)  # None tells the other ranks to stop
+                comm.bcast((groups, failure), root=0)
         else:
-            groups = comm.bcast(None, root=0)
+            groups, (kind, message) = comm.bcast(None, root=0)
             if groups is None:
-                raise RuntimeError(f"gmsh failed to mesh {name!r} on rank 0")
+                raise kind(message)
         mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
     finally:
         gmsh.finalize()
@@ -72,11 +85,16 @@ def _mesh_hexahedra(regions: Groups, boundaries: Groups) -> tuple[dict[str, int]
     numbers = itertools.count(1)
     tags = _add_physical_groups(3, regions, numbers), _add_physical_groups(2, boundaries, numbers)
     gmsh.model.mesh.generate(3)
+    check_hexahedra(RuntimeError, "gmsh made")
+    return tags
+
+
+def check_hexahedra(error, source):
+    """Raise ``error`` unless the model's 3D elements are all 8-node hexahedra."""
     types = list(gmsh.model.mesh.getElementTypes(3))
     if types != [gmsh.model.mesh.getElementType(CELL, 1)]:
         made = ", ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
-        raise RuntimeError(f"gmsh made 3D elements [{made}]; only 8-node hexahedra are supported")
-    return tags
+        raise error(f"{source} 3D elements [{made}]; only 8-node hexahedra are supported")
 
 
 def _add_physical_groups(dim: int, groups: Groups, numbers) -> dict[str, int]:
