@@ -107,6 +107,7 @@ class FieldWriter:
             if rank0:
                 self._tool = XdmfSeries(folder / "tool.xdmf", points, quads, "Quadrilateral",
                                         CONVENTIONS)
+                self._tool_mesh = (points, quads)
         self.last = None   # (points, cells, point data, cell data) of the last frame, rank 0
 
     def write(self, t, tool_travel=0.0):
@@ -123,6 +124,17 @@ class FieldWriter:
                 self._tool.write(t, {"displacement": np.tile(tool_travel * self._direction,
                                                              (self._tool.n_points, 1))}, {})
         self.last = (self._mesh.points, self._mesh.cells, point_data, cell_data)
+        self._travel = tool_travel
+
+    def picture(self):
+        """(soil, tool) of the last frame for :func:`figures_3d.soil_3d_png` on rank 0, or
+        None (no tool, or displacement or plastic strain not written)."""
+        if self._tool is None or self.last is None:
+            return None
+        _, _, point_data, cell_data = self.last
+        if "displacement" not in point_data or "plastic_strain" not in cell_data:
+            return None
+        return self.last, (*self._tool_mesh, self._travel * self._direction)
 
 
 class RunFolder:

@@ -1,10 +1,11 @@
 """Run a scene: mesh, problem, load stepping, outputs and the summary."""
 import dataclasses
+import sys
 import time
 
 from mpi4py import MPI
 
-from . import figures
+from . import figures, figures_3d
 from .closed_form import narrow_tine_draft
 from .insitu import check_initial_stress
 from .interrupt import Interrupted
@@ -115,4 +116,9 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         figures.curve_png(records, scene, out_dir / "curve.png", estimate)
     if interrupted is None and records and problem.tool is not None and problem.tool.interface is not None:
         figures.tool_section_png(problem, out_dir / "tool-section.png")
+    picture = folder.fields.picture() if folder.fields is not None and comm.rank == 0 else None
+    if interrupted is None and records and picture is not None:
+        failure = figures_3d.draw_in_subprocess(*picture, scene.units, out_dir / "soil-3d.png")
+        if failure:
+            print(f"soilbin: warning: soil-3d.png not drawn: {failure}", file=sys.stderr)
     return summary

@@ -196,3 +196,16 @@ def test_the_jit_compiler_logs_nothing_below_warnings():
             "logging.info('x86_64-linux-gnu-gcc -pthread ...')\nlogging.warning('kept')\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert done.stderr.strip() == "WARNING:root:kept"
+
+
+def test_the_3d_picture_is_drawn_off_screen(tmp_path):
+    """pyvista in its own process (VTK and DOLFINx clash in one): a PNG of the set size."""
+    from matplotlib.image import imread
+    from soilbin.figures_3d import draw_in_subprocess
+    corners = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
+    soil = (corners, np.array([[0, 1, 3, 2, 4, 5, 7, 6]]), {"displacement": 0.01 * corners},
+            {"plastic_strain": np.array([0.02])})
+    tool = (corners[[0, 1, 3, 2]] + [0, 0, 1.2], np.array([[0, 1, 2, 3]]), np.array([0.01, 0, 0]))
+    assert draw_in_subprocess(soil, tool, "lb, in", tmp_path / "soil-3d.png") == ""
+    assert imread(tmp_path / "soil-3d.png").shape[:2] == (650, 1000)
+    assert not (tmp_path / "soil-3d.npz").exists()

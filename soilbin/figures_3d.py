@@ -1,0 +1,78 @@
+"""A 3D picture of a tool run: the deformed soil coloured by the equivalent plastic strain,
+with the tool drawn, made off screen with pyvista (EGL or OSMesa; no X server).
+
+VTK runs in its own process (``python -m soilbin.figures_3d DATA.npz OUT.png UNITS``):
+in the process that has loaded DOLFINx, VTK's C++ runtime clashes with it (std::regex
+aborts), and a crash of the renderer must not end a run. A picture that cannot be drawn
+is a warning, not a failed run.
+"""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+#: Largest displacement drawn, as a fraction of the mesh's extent (the scale is printed).
+DRAWN_DISPLACEMENT = 0.03
+
+
+def soil_3d_png(soil, tool, units, path):
+    """``soil``: (points, hexahedra, point data, cell data) of the last frame (displacement on
+    the nodes, plastic_strain on the cells); ``tool``: (points, quadrilaterals, its
+    displacement (3,)); drawn on the initial mesh warped by a stated factor."""
+    os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")   # skip X
+    import pyvista as pv
+    points, cells, point_data, cell_data = soil
+    u = point_data["displacement"]
+    extent = np.ptp(points, axis=0).max()
+    largest = np.abs(u).max()
+    scale = DRAWN_DISPLACEMENT * extent / largest if largest > 0 else 1.0
+    grid = pv.UnstructuredGrid({pv.CellType.HEXAHEDRON: cells}, points)
+    grid.point_data["displacement"] = u
+    grid.cell_data["plastic_strain"] = cell_data["plastic_strain"]
+    plotter = pv.Plotter(off_screen=True, window_size=(1000, 650))
+    plotter.add_mesh(grid.warp_by_vector("displacement", factor=scale), scalars="plastic_strain",
+                     cmap="viridis", show_edges=True, edge_color="gray",
+                     scalar_bar_args={"title": "plastic strain [-]", "vertical": True,
+                                      "position_x": 0.85, "position_y": 0.2, "fmt": "%.2e"})
+    tool_points, quads, tool_u = tool
+    plotter.add_mesh(pv.UnstructuredGrid({pv.CellType.QUAD: quads}, tool_points + scale * tool_u),
+                     color="firebrick", show_edges=True, label="tool")
+    plotter.show_bounds(xtitle="x (travel)", ytitle="y", ztitle="z", font_size=9,
+                        location="outer")
+    plotter.add_text(f"deformed soil, displacements drawn x{scale:.3g}; tool in red\n"
+                     f"units: {units}", font_size=9)
+    plotter.view_vector((0.5, -1.0, 0.6))
+    plotter.screenshot(str(path))
+    plotter.close()
+
+
+def draw_in_subprocess(soil, tool, units, path):
+    """Draw :func:`soil_3d_png` in a child process; returns '' or why it was not drawn."""
+    path = Path(path)
+    data = path.with_suffix(".npz")
+    (points, cells, point_data, cell_data), (tool_points, quads, tool_u) = soil, tool
+    np.savez(data, points=points, cells=cells, displacement=point_data["displacement"],
+             plastic_strain=cell_data["plastic_strain"], tool_points=tool_points, quads=quads,
+             tool_u=tool_u)
+    try:
+        done = subprocess.run([sys.executable, "-m", __name__, str(data), str(path), units],
+                              capture_output=True, text=True, timeout=300)
+    except (OSError, subprocess.TimeoutExpired) as err:
+        return str(err)
+    finally:
+        data.unlink(missing_ok=True)
+    lines = (done.stderr.strip().splitlines() or [f"exit status {done.returncode}"])
+    return "" if done.returncode == 0 and path.is_file() else lines[-1]
+
+
+def _main(data, path, units):
+    d = np.load(data)
+    soil_3d_png((d["points"], d["cells"], {"displacement": d["displacement"]},
+                 {"plastic_strain": d["plastic_strain"]}),
+                (d["tool_points"], d["quads"], d["tool_u"]), units, path)
+
+
+if __name__ == "__main__":
+    _main(*sys.argv[1:4])
