@@ -37,14 +37,25 @@ def _handler(signum, frame):
 
 
 @contextlib.contextmanager
-def handlers():
-    """SIGINT and SIGTERM raise Interrupted while inside (the old handlers come back after)."""
-    previous = {s: signal.signal(s, _handler) for s in SIGNALS}
+def kept():
+    """The SIGINT and SIGTERM handlers of now, back on leaving (gmsh sets SIGINT's to the
+    default on import and to the one it found then on finalize)."""
+    previous = {s: signal.getsignal(s) for s in SIGNALS}
     try:
         yield
     finally:
         for s, old in previous.items():
-            signal.signal(s, old)
+            if old is not None:   # None: a handler not set from Python
+                signal.signal(s, old)
+
+
+@contextlib.contextmanager
+def handlers():
+    """SIGINT and SIGTERM raise Interrupted while inside (the old handlers come back after)."""
+    with kept():
+        for s in SIGNALS:
+            signal.signal(s, _handler)
+        yield
 
 
 @contextlib.contextmanager

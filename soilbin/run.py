@@ -5,10 +5,9 @@ import time
 
 from mpi4py import MPI
 
-from . import figures, figures_3d
+from . import figures, figures_3d, interrupt
 from .closed_form import narrow_tine_draft
 from .insitu import check_initial_stress
-from .interrupt import Interrupted
 from .meshes import BUILDERS
 from .outdir import prepare_on_rank0
 from .output import RunFolder
@@ -56,7 +55,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     run with status "interrupted" (summary written, no collective call after it)."""
     start = time.perf_counter()
     out_dir = prepare_on_rank0(comm, out_dir)
-    tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
+    with interrupt.kept():
+        tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
     check_initial_stress(scene, tagged)
     problem = SoilProblem(scene, tagged)
     folder = RunFolder(out_dir, problem, scene)
@@ -73,7 +73,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     interrupted = None
     try:
         result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step)
-    except Interrupted as signal:
+    except interrupt.Interrupted as signal:
         interrupted = signal
         result = StepperResult(tuple(folder.records), False,
                                f"{signal}; the converged steps are in {out_dir}")
