@@ -16,9 +16,9 @@ def curve_png(records, scene, path, estimate=None):
         ax.axhline(estimate.draft, color="tab:red", ls="--", lw=1,
                    label=f"{estimate.model}: {estimate.draft:.3g}")
         ax.legend(fontsize=8)
-    ax.set_xlabel(f"displacement along {scene.loading.direction.value} [{scene.units}]")
-    ax.set_ylabel("force [along the loading direction]")
-    ax.set_title(scene.name, fontsize=9)
+    ax.set_xlabel(f"displacement along {scene.loading.direction.value} [length]")
+    ax.set_ylabel(f"force along {scene.loading.direction.value} [force]")
+    ax.set_title(f"{scene.name}\nunits: {scene.units}", fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -46,19 +46,23 @@ def tool_section_png(problem, path, depth_fraction=0.5):
     xs, us, ps, gaps = (np.concatenate(parts) for parts in zip(*data))
     fig, ax = plt.subplots(figsize=(7, 4.5))
     scale = np.abs(us[:, :2]).max()
-    ax.quiver(xs[:, 0], xs[:, 1], us[:, 0], us[:, 1], np.linalg.norm(us[:, :2], axis=1),
-              angles="xy", scale_units="xy", scale=scale / 0.8 if scale > 0 else 1.0, width=0.003)
+    arrows = ax.quiver(xs[:, 0], xs[:, 1], us[:, 0], us[:, 1], np.linalg.norm(us[:, :2], axis=1),
+                       angles="xy", scale_units="xy", scale=scale / 0.8 if scale > 0 else 1.0,
+                       width=0.003)
+    if scale > 0:
+        ax.quiverkey(arrows, 0.85, 1.04, scale, f"{scale:.3g} [length]", labelpos="E",
+                     fontproperties={"size": 8})
     sc = ax.scatter(ps[:, 0], ps[:, 1], c=gaps, cmap="magma_r", s=18, edgecolors="k", linewidths=0.3)
-    fig.colorbar(sc, ax=ax, label="gap soil-tool")
+    fig.colorbar(sc, ax=ax, label="gap soil-tool [length]")
     lo, hi = ps.min(axis=0), ps.max(axis=0)
     reach = 4.0 * max(hi[0] - lo[0], hi[1] - lo[1])
     ax.set_xlim(lo[0] - reach, hi[0] + 1.5 * reach)
     ax.set_ylim(max(lo[1] - reach, xs[:, 1].min()), hi[1] + reach)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (travel)")
-    ax.set_ylabel("y")
-    ax.set_title(f"section z = {z_section:.3g}: soil displacement (arrows) and gap at the tool",
-                 fontsize=9)
+    ax.set_xlabel("x (travel) [length]")
+    ax.set_ylabel("y [length]")
+    ax.set_title(f"section z = {z_section:.3g}: soil displacement (arrows) and gap at the tool\n"
+                 f"units: {problem.scene.units}", fontsize=8, loc="left")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -350,9 +350,11 @@ def _report(line):
 
 
 def _earlier(case, folder, retry_failed):
-    """The outcome of an earlier run that stands (complete, collapse; failed unless retried)."""
+    """The outcome of an earlier run that stands (complete, collapse; failed unless retried;
+    never an interrupted one)."""
     summary = earlier_summary(case, folder)
-    if summary is None or (summary["status"] not in DONE and retry_failed):
+    if (summary is None or summary["status"] == "interrupted"
+            or (summary["status"] not in DONE and retry_failed)):
         return None
     return Outcome(case, summary["status"], summary, ran=False)
 
