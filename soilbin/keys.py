@@ -3,6 +3,8 @@
 import dataclasses
 import enum
 
+from .meshes import BUILDERS
+
 
 def _shown(value):
     if isinstance(value, enum.Enum):
@@ -32,7 +34,8 @@ def record_keys(record, prefix):
 
 def scene_keys(scene):
     """The rows of every settable key of a loaded scene."""
-    rows = [("mesh.builder", scene.mesh_builder, "", "mesh builder (soilbin list shows scenes)")]
+    rows = [("mesh.builder", scene.mesh_builder, "one of " + ", ".join(BUILDERS),
+             "the mesh builder; changing it changes the mesh keys")]
     rows += record_keys(scene.mesh, "mesh")
     for name, model in scene.materials.items():
         rows += record_keys(model, f"materials.{name}")
