@@ -270,6 +270,9 @@ def main(argv=None):
             if _rank0():
                 print(f"soilbin: {signal}", file=sys.stderr)
             return signal.exit_status
+        except BrokenPipeError:   # stdout closed early (soilbin keys SCENE | head)
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
         except Exception as err:
             print(f"soilbin: internal error: {_one_line(err)}; traceback in "
                   f"{_save_traceback(getattr(args, 'out', None))}", file=sys.stderr)
