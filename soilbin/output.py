@@ -9,8 +9,17 @@ from pathlib import Path
 
 from dolfinx import io
 
-CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure",
-                 "newton_iterations", "cuts", "wall_s")
+#: Every column a curve.csv may have; a run writes the step, what its problem observes
+#: (a loaded boundary: pressure; a tool: lift and the soil's volume change ahead of it)
+#: and Newton's effort.
+CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure", "lift",
+                 "front_volumetric_strain", "newton_iterations", "cuts", "wall_s")
+OBSERVED = ("pressure", "lift", "front_volumetric_strain")
+
+
+def curve_columns(problem):
+    """The columns of this problem's curve.csv."""
+    return tuple(c for c in CURVE_COLUMNS if c not in OBSERVED or c in problem.curve_columns)
 
 
 class FieldWriter:
@@ -51,11 +60,11 @@ class RunFolder:
             self.path.mkdir(parents=True, exist_ok=True)
             (self.path / "scene.toml").write_text(scene.resolved())
             with open(self.path / "curve.csv", "w", newline="") as f:
-                csv.writer(f).writerow(CURVE_COLUMNS)
-        self._area = problem.area
+                csv.writer(f).writerow(curve_columns(problem))
         self._fields = (FieldWriter(self.path / "fields.xdmf", problem, scene.output.fields)
                         if scene.output.fields else None)
         self._every = scene.output.every
+        self._stops = scene.output.stops(scene.loading)
         self._last = None
 
     def add_step(self, record):
@@ -63,16 +72,22 @@ class RunFolder:
             with open(self.path / "curve.csv", "a", newline="") as f:
                 csv.writer(f).writerow([record.step, f"{record.load_factor:.10g}",
                                         f"{record.displacement:.10g}", f"{record.force:.10g}",
-                                        f"{record.force / self._area:.10g}", record.newton_iterations,
+                                        *(f"{v:.10g}" for v in record.columns.values()),
+                                        record.newton_iterations,
                                         record.cuts, f"{record.wall_s:.4f}"])
-        if self._fields is not None and record.step % self._every == 0:
+        if self._fields is not None and self.writes_fields(record):
             self._fields.write(record.load_factor)
         self._last = record
+
+    def writes_fields(self, record):
+        """Fields are written every ``every`` steps, at the stated loads and at the end."""
+        return (record.step % self._every == 0
+                or any(abs(record.load_factor - stop) < 1e-9 for stop in self._stops))
 
     def finish(self, summary):
         """Fields of the last converged step (if not yet written), summary.json, close."""
         if self._fields is not None:
-            if self._last is not None and self._last.step % self._every != 0:
+            if self._last is not None and not self.writes_fields(self._last):
                 self._fields.write(self._last.load_factor)
             self._fields.close()
         if self._rank0:

@@ -6,7 +6,7 @@ from mpi4py import MPI
 
 from pathlib import Path
 
-from . import figures
+from . import figures, section_figures
 from .closed_form import narrow_tine_draft
 from .meshes import BUILDERS
 from .output import RunFolder
@@ -57,15 +57,18 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     folder = RunFolder(out_dir, problem, scene)
     setup_s = time.perf_counter() - start
 
-    area = problem.area   # collective: every rank, before the steps
+    stops = scene.output.stops(scene.loading)
 
     def on_step(record):
         folder.add_step(record)
+        if problem.tool is not None and any(abs(record.load_factor - s) < 1e-9 for s in stops):
+            load = record.load_factor * scene.loading.magnitude
+            section_figures.sections_png(problem, scene, load, out_dir / f"sections-{load:g}.png")
         if progress is not None:
-            progress(record, area)
+            progress(record)
 
     loading = scene.loading
-    result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step)
+    result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step, stops=stops)
     if result.complete:
         status = "complete"
     elif loading.until_collapse and result.steps:

@@ -17,6 +17,7 @@ import dolfinx.fem.petsc  # noqa: F401
 
 from ..errors import InputError
 from ..scene import TOOL, Control
+from ..solver.stepping import Observation
 from ..tensors import ufl_from_mandel
 
 
@@ -109,6 +110,8 @@ def dead_loads(scene, tagged, disc, frame, kinematics, v):
 class BoundaryLoad:
     """A facet group driven by the load factor: a traction (force control) or a displacement
     (displacement control, through the supports' prescribed values)."""
+    #: Per-step values beside displacement and force (see :meth:`observe`).
+    columns = ("pressure",)
 
     def __init__(self, scene, tagged, disc, frame, kinematics, supports, w, v):
         loading = scene.loading
@@ -124,6 +127,7 @@ class BoundaryLoad:
         self._probe = probe(disc, tagged, (loading.boundary,), self.direction)
         self._v, self._force = v, None
         self._area = area_of(mesh, self._ds)
+        self._initial_area = self.area
         self._displacement = fem.form(
             ufl.dot(ufl.as_vector(self.direction), kinematics.total_displacement()) * self._ds)
         self._factor = self._committed_factor = 0.0
@@ -148,8 +152,11 @@ class BoundaryLoad:
         return assemble_total(self._area)
 
     def observe(self):
-        """(mean displacement, force) along the loading direction; collective."""
-        return assemble_total(self._displacement) / self.area, assemble_total(self._force)
+        """Mean displacement and force along the loading direction, and the pressure (force
+        over the initial area); collective."""
+        force = assemble_total(self._force)
+        return Observation(assemble_total(self._displacement) / self.area, force,
+                           {"pressure": force / self._initial_area})
 
 
 def assemble_total(form):
