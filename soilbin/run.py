@@ -30,9 +30,8 @@ def headline_results(scene, records, area):
 
 
 def draft_estimate(scene):
-    """McKyes & Ali draft of the modelled tool (a soil_bin scene with gravity and a soil
-    with c, phi), or None. The mesh holds the tool's span against a frictionless plane
-    (the glass wall, or the symmetry plane of the embedded half model): one crescent.
+    """McKyes & Ali draft of the whole tool (a soil_bin scene with gravity and a soil with
+    c, phi), or None: one side crescent against the bin's glass wall, two when embedded.
     A bonded tool is fully rough: delta = phi, c_a = c."""
     if scene.mesh_builder != "soil_bin" or scene.tool is None or scene.geostatic is None:
         return None
@@ -42,9 +41,9 @@ def draft_estimate(scene):
     interface = scene.tool.interface
     delta, c_a = (soil.phi, soil.c) if scene.tool.bonded else (interface.delta, interface.c_a)
     mesh = scene.mesh
-    return narrow_tine_draft(width=mesh.span, depth=mesh.tool_depth, rake=mesh.rake_angle,
+    return narrow_tine_draft(width=mesh.tool_width, depth=mesh.tool_depth, rake=mesh.rake_angle,
                              phi=soil.phi, delta=delta, gamma=scene.geostatic.unit_weight,
-                             c=soil.c, c_a=c_a, crescents=1)
+                             c=soil.c, c_a=c_a, crescents=2 if mesh.tool_share < 1.0 else 1)
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
