@@ -59,7 +59,7 @@ def sections_png(problem, scene, load, path):
 
 def _draw(panels, low, high, scene, load, path):
     size = high - low
-    reach = 3.0 * max(size[0], size[1], 1e-12)
+    reach = 1.5 * max(size.max(), 1e-12)   # the tool depth or width, whichever larger
     scale = max(np.abs(p[5]).max(initial=0.0) for p in panels) or 1.0
     fig, axs = plt.subplots(3, 1, figsize=(7, 12))
     for ax, (title, normal, plane, axes, xs, us, tool) in zip(axs, panels):
