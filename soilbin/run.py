@@ -15,16 +15,17 @@ from .scene import Headline
 from .solver.stepping import run_load_steps
 
 
-def headline_results(scene, records, area):
-    """The scene's headline values, read off the converged steps."""
+def headline_results(scene, records):
+    """The scene's headline values, read off the converged steps (the pressure: the curve's,
+    over the loaded boundary's current area)."""
     if not records:
         return {key: None for key in scene.headline}
     read = {
         Headline.FINAL_DISPLACEMENT: lambda: records[-1].displacement,
         Headline.FINAL_FORCE: lambda: records[-1].force,
-        Headline.FINAL_PRESSURE: lambda: records[-1].force / area,
+        Headline.FINAL_PRESSURE: lambda: records[-1].columns["pressure"],
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
-        Headline.PEAK_PRESSURE: lambda: max(r.force for r in records) / area,
+        Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
     }
     return {key: read[result.of]() / result.divide_by for key, result in scene.headline.items()}
 
@@ -92,7 +93,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "cuts": sum(r.cuts for r in records),
         "setup_s": round(setup_s, 3),
         "wall_s": round(time.perf_counter() - start, 3),
-        **headline_results(scene, records, problem.area),
+        **headline_results(scene, records),
     }
     estimate = draft_estimate(scene)
     if estimate is not None:

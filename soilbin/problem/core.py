@@ -97,11 +97,6 @@ class SoilProblem:
         """Names of the values each observation carries beside displacement and force."""
         return self.drive.columns
 
-    @property
-    def area(self):
-        """Area of the driven boundary (current configuration); collective."""
-        return self.drive.area
-
     def update_material_state(self):
         """The constitutive and interface updates of one Newton iterate."""
         self.points.update()

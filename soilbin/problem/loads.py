@@ -127,7 +127,6 @@ class BoundaryLoad:
         self._probe = probe(disc, tagged, (loading.boundary,), self.direction)
         self._v, self._force = v, None
         self._area = area_of(mesh, self._ds)
-        self._initial_area = self.area
         self._displacement = fem.form(
             ufl.dot(ufl.as_vector(self.direction), kinematics.total_displacement()) * self._ds)
         self._factor = self._committed_factor = 0.0
@@ -152,11 +151,12 @@ class BoundaryLoad:
         return assemble_total(self._area)
 
     def observe(self):
-        """Mean displacement and force along the loading direction, and the pressure (force
-        over the initial area); collective."""
-        force = assemble_total(self._force)
-        return Observation(assemble_total(self._displacement) / self.area, force,
-                           {"pressure": force / self._initial_area})
+        """Mean displacement and force along the loading direction, and the pressure: the
+        force over the boundary's current area (its initial area in small deformation);
+        collective."""
+        force, area = assemble_total(self._force), self.area
+        return Observation(assemble_total(self._displacement) / area, force,
+                           {"pressure": force / area})
 
 
 def assemble_total(form):

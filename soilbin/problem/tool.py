@@ -17,13 +17,11 @@ across a symmetry plane). The draft is its component along the travel, the
 lift the soil's upward force on the tool.
 """
 import numpy as np
-import ufl
 from mpi4py import MPI
 
 from ..interface.rigid_tool import RigidToolContact
 from ..scene import Control
 from ..solver.stepping import Observation
-from .loads import area_of, assemble_total
 from .probes import CellValue, cell_ahead, face_nodes
 
 
@@ -48,15 +46,14 @@ class RigidTool:
             supports.bcs, incremental=kinematics.incremental,
             initial_stress=geostatic and geostatic.stress)
         self.nodal_terms = [self.interface]
-        ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.facet_tags)
-        self._area = area_of(mesh, ds(tuple(tagged.boundaries[f] for f in tool.faces)))
+        self._comm = mesh.comm
         self.face_points = {face: face_nodes(tagged, face) for face in tool.faces}
         self._front_strain = CellValue(mesh, kinematics.volume_change(),
                                        cell_ahead(mesh, self._front_centre(), direction))
 
     def _front_centre(self):
         """Centre of the face that leads the travel (its nodes furthest along it)."""
-        comm = self._area.mesh.comm
+        comm = self._comm
         lead = {face: comm.allreduce((x @ self.direction).max(initial=-np.inf), op=MPI.MAX)
                 for face, x in self.face_points.items()}
         front = self.face_points[max(lead, key=lead.get)]
@@ -101,11 +98,6 @@ class RigidTool:
 
     def roll_back(self):
         self.set_value(self._committed_travel)
-
-    @property
-    def area(self):
-        """Area of the tool's faces (current configuration); collective."""
-        return assemble_total(self._area)
 
     def force(self):
         """Resultant force (3,) the whole tool exerts on the soil, world axes (across a symmetry
