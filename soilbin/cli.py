@@ -140,10 +140,11 @@ def _list_scenes(args):
     return 0
 
 
-def _progress(record, area):
+def _progress(record):
+    columns = "".join(f"  {name} {value:11.5g}" for name, value in record.columns.items())
     print(f"step {record.step:3d}  load factor {record.load_factor:8.4f}  "
-          f"displacement {record.displacement:11.5g}  force {record.force:11.5g}  "
-          f"pressure {record.force / area:11.5g}  Newton {record.newton_iterations:2d}"
+          f"displacement {record.displacement:11.5g}  force {record.force:11.5g}"
+          f"{columns}  Newton {record.newton_iterations:2d}"
           + (f"  cuts {record.cuts}" if record.cuts else "")
           + f"  {record.wall_s:7.2f} s", file=sys.stderr, flush=True)
 

@@ -9,9 +9,9 @@ from pathlib import Path
 
 from .errors import InputError
 
-#: What ``soilbin run`` writes into its folder (files, and the folder of field frames).
+#: What ``soilbin run`` writes into its folder (file patterns, and the folder of field frames).
 RUN_FILES = ("scene.toml", "curve.csv", "curve.png", "summary.json", "fields.xdmf", "fields.h5",
-             "tool.xdmf", "tool-section.png", "soil-3d.png", "traceback.txt")
+             "tool.xdmf", "tool-section.png", "sections-*.png", "soil-3d.png", "traceback*.txt")
 FRAMES_DIR = "fields"
 
 
@@ -25,8 +25,9 @@ def prepare(path):
         probe.unlink()
     except OSError as err:
         raise InputError(f"--out {path}: cannot write there ({err.strerror or err})") from None
-    for name in RUN_FILES:
-        (path / name).unlink(missing_ok=True)
+    for pattern in RUN_FILES:
+        for name in path.glob(pattern):
+            name.unlink(missing_ok=True)
     shutil.rmtree(path / FRAMES_DIR, ignore_errors=True)
     return path
 

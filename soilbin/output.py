@@ -18,8 +18,17 @@ from .interrupt import deferred
 from .scene import TOOL
 from .xdmf import XdmfSeries
 
-CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure",
-                 "newton_iterations", "cuts", "wall_s")
+#: Every column a curve.csv may have; a run writes the step, what its problem observes
+#: (a loaded boundary: pressure; a tool: lift and the soil's volume change ahead of it)
+#: and Newton's effort.
+CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure", "lift",
+                 "front_volumetric_strain", "newton_iterations", "cuts", "wall_s")
+OBSERVED = ("pressure", "lift", "front_volumetric_strain")
+
+
+def curve_columns(problem):
+    """The columns of this problem's curve.csv."""
+    return tuple(c for c in CURVE_COLUMNS if c not in OBSERVED or c in problem.curve_columns)
 
 #: Written into fields.xdmf and tool.xdmf (XML Information and HDF5 attributes).
 CONVENTIONS = {
@@ -144,27 +153,33 @@ class RunFolder:
     def __init__(self, path, problem, scene):
         self.path = Path(path)
         self._rank0 = problem.comm.rank == 0
+        self._columns = curve_columns(problem)
         if self._rank0:
             (self.path / "scene.toml").write_text(scene.resolved())
             with open(self.path / "curve.csv", "w", newline="") as f:
-                csv.writer(f).writerow(CURVE_COLUMNS)
-        self._area = problem.area
+                csv.writer(f).writerow(self._columns)
         self._moves_tool = scene.loading.boundary == TOOL
         self.fields = (FieldWriter(self.path, problem, scene.output.fields)
                        if scene.output.fields else None)
         if self.fields is not None:
             self.fields.write(0.0)
         self._every = scene.output.every
+        self._stops = scene.output.stops(scene.loading)
         self.records = []   # the converged steps, in order
 
     def add_step(self, record):
         self.records.append(record)
         if self._rank0:
-            values = {**dataclasses.asdict(record), "pressure": record.force / self._area}
+            values = {**dataclasses.asdict(record), **record.columns}
             with deferred(), open(self.path / "curve.csv", "a", newline="") as f:
-                csv.writer(f).writerow([_text(values[column]) for column in CURVE_COLUMNS])
-        if self.fields is not None and record.step % self._every == 0:
+                csv.writer(f).writerow([_text(values[column]) for column in self._columns])
+        if self.fields is not None and self.writes_fields(record):
             self._write_fields(record)
+
+    def writes_fields(self, record):
+        """Fields are written every ``every`` steps, at the stated loads and at the end."""
+        return (record.step % self._every == 0
+                or any(abs(record.load_factor - stop) < 1e-9 for stop in self._stops))
 
     def _write_fields(self, record):
         self.fields.write(record.load_factor, record.displacement if self._moves_tool else 0.0)
@@ -174,7 +189,7 @@ class RunFolder:
         interruption), then summary.json."""
         last = self.records[-1] if self.records else None
         if (self.fields is not None and not interrupted and last is not None
-                and last.step % self._every != 0):
+                and not self.writes_fields(last)):
             self._write_fields(last)
         if self._rank0:
             with deferred():

@@ -5,7 +5,7 @@ import time
 
 from mpi4py import MPI
 
-from . import figures, figures_3d, interrupt
+from . import figures, figures_3d, interrupt, section_figures
 from .closed_form import narrow_tine_draft
 from .insitu import check_initial_stress
 from .meshes import BUILDERS
@@ -16,24 +16,24 @@ from .scene import Headline
 from .solver.stepping import StepperResult, run_load_steps
 
 
-def headline_results(scene, records, area):
-    """The scene's headline values, read off the converged steps."""
+def headline_results(scene, records):
+    """The scene's headline values, read off the converged steps (the pressure: the curve's,
+    over the loaded boundary's current area)."""
     if not records:
         return {key: None for key in scene.headline}
     read = {
         Headline.FINAL_DISPLACEMENT: lambda: records[-1].displacement,
         Headline.FINAL_FORCE: lambda: records[-1].force,
-        Headline.FINAL_PRESSURE: lambda: records[-1].force / area,
+        Headline.FINAL_PRESSURE: lambda: records[-1].columns["pressure"],
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
-        Headline.PEAK_PRESSURE: lambda: max(r.force for r in records) / area,
+        Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
     }
     return {key: read[result.of]() / result.divide_by for key, result in scene.headline.items()}
 
 
 def draft_estimate(scene):
-    """McKyes & Ali draft of the modelled tool (a soil_bin scene with gravity and a soil
-    with c, phi), or None. The mesh holds the tool's span against a frictionless plane
-    (the glass wall, or the symmetry plane of the embedded half model): one crescent.
+    """McKyes & Ali draft of the whole tool (a soil_bin scene with gravity and a soil with
+    c, phi), or None: one side crescent against the bin's glass wall, two when embedded.
     A bonded tool is fully rough: delta = phi, c_a = c."""
     if scene.mesh_builder != "soil_bin" or scene.tool is None or scene.geostatic is None:
         return None
@@ -43,9 +43,9 @@ def draft_estimate(scene):
     interface = scene.tool.interface
     delta, c_a = (soil.phi, soil.c) if scene.tool.bonded else (interface.delta, interface.c_a)
     mesh = scene.mesh
-    return narrow_tine_draft(width=mesh.span, depth=mesh.tool_depth, rake=mesh.rake_angle,
+    return narrow_tine_draft(width=mesh.tool_width, depth=mesh.tool_depth, rake=mesh.rake_angle,
                              phi=soil.phi, delta=delta, gamma=scene.geostatic.unit_weight,
-                             c=soil.c, c_a=c_a, crescents=1)
+                             c=soil.c, c_a=c_a, crescents=2 if mesh.tool_share < 1.0 else 1)
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
@@ -62,17 +62,20 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     folder = RunFolder(out_dir, problem, scene)
     setup_s = time.perf_counter() - start
 
-    area = problem.area   # collective: every rank, before the steps
+    stops = scene.output.stops(scene.loading)
 
     def on_step(record):
         folder.add_step(record)
+        if problem.tool is not None and any(abs(record.load_factor - s) < 1e-9 for s in stops):
+            load = record.load_factor * scene.loading.magnitude
+            section_figures.sections_png(problem, scene, load, out_dir / f"sections-{load:g}.png")
         if progress is not None:
-            progress(record, area)
+            progress(record)
 
     loading = scene.loading
     interrupted = None
     try:
-        result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step)
+        result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step, stops=stops)
     except interrupt.Interrupted as signal:
         interrupted = signal
         result = StepperResult(tuple(folder.records), False,
@@ -103,7 +106,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "cuts": sum(r.cuts for r in records),
         "setup_s": round(setup_s, 3),
         "wall_s": round(time.perf_counter() - start, 3),
-        **headline_results(scene, records, problem.area),
+        **headline_results(scene, records),
     }
     estimate = draft_estimate(scene)
     if estimate is not None:

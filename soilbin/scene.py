@@ -123,15 +123,18 @@ class Tool(Params):
     """A rigid tool in a cavity of the soil mesh, displaced as a whole (loading.boundary = 'tool')."""
     faces: tuple[str, ...] = param(doc="soil boundaries against the tool (the cavity faces); "
                                        "default: the mesh builder's contact groups")
-    bonded: bool = param(False, doc="true: the faces move with the tool (no interface)")
-    interface: MohrCoulombInterface = param(None, doc="Mohr-Coulomb interface law (unless bonded)")
+    bonded: bool = param(False, doc="true: the interface's springs never slip or open (no "
+                                    "interface behaviour)")
+    interface: MohrCoulombInterface = param(None, doc="Mohr-Coulomb interface law (its k_n, k_s "
+                                                      "also tie a bonded tool)")
 
     def __post_init__(self):
         super().__post_init__()
         if not self.faces:
             raise InputError("faces: name at least one boundary")
-        if not self.bonded and self.interface is None:
-            raise InputError("interface: a [tool.interface] table is required unless bonded = true")
+        if self.interface is None:
+            raise InputError("interface: a [tool.interface] table is required (its penalty "
+                             "stiffnesses k_n, k_s also tie a bonded tool)")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,6 +170,12 @@ class Output(Params):
     fields: tuple[Field, ...] = param((Field.DISPLACEMENT, Field.STRESS, Field.PLASTIC_STRAIN),
                                       doc="XDMF fields: displacement, stress, plastic_strain, gap")
     every: int = param(1, lo=1, doc="write fields every this many converged steps (and the last)")
+    at: tuple[float, ...] = param((), doc="loads (force or displacement, as loading.magnitude) where "
+                                          "a step ends and fields and sections are written")
+
+    def stops(self, loading):
+        """The load factors of ``at``."""
+        return tuple(sorted(value / loading.magnitude for value in self.at))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -323,9 +332,6 @@ def _parse(raw, path):
     if loading.boundary == TOOL:
         if tool is None:
             raise InputError("loading.boundary = 'tool' needs a [tool] table")
-        if loading.control is Control.FORCE and tool.bonded:
-            raise InputError("loading.control = 'force': a force-controlled tool acts through "
-                             "its interface; set tool.bonded = false")
     else:
         named.append(("loading.boundary", loading.boundary))
     for where, name in named:
@@ -344,10 +350,15 @@ def _parse(raw, path):
             raise InputError("geostatic: gravity acts along -z; it cannot be combined with "
                              "analysis.frame_rotation")
         geostatic = read_geostatic(raw["geostatic"], {m: materials[m] for m in regions.values()})
+    output = from_table(Output, raw.get("output", {}), "output")
+    for i, value in enumerate(output.at):
+        if not 0.0 < value <= loading.magnitude:
+            raise InputError(f"output.at[{i}] = {value!r} is outside (0, loading.magnitude = "
+                             f"{loading.magnitude!r}]")
     return Scene(path=path, title=title, units=units, mesh_builder=builder_name, mesh=mesh,
                  materials=materials, regions=dict(regions), supports=supports, loading=loading,
                  analysis=analysis, solver=from_table(Solver, raw.get("solver", {}), "solver"),
-                 output=from_table(Output, raw.get("output", {}), "output"),
+                 output=output,
                  headline=headline, tool=tool, tractions=tractions, geostatic=geostatic)
 
 

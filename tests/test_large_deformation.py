@@ -4,7 +4,6 @@ import math
 
 import numpy as np
 import pytest
-from dolfinx import fem
 
 from soilbin.solver.stepping import run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix

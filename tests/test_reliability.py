@@ -76,7 +76,7 @@ def test_a_tine_killed_after_step_3_keeps_every_field_readable(tmp_path):
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_ends_the_run_with_a_summary_and_128_plus_its_number(capsys, monkeypatch,
                                                                       tmp_path, signum):
-    def progress(record, area):
+    def progress(record):
         if record.step == 2:
             os.kill(os.getpid(), signum)
     monkeypatch.setattr(cli, "_progress", progress)
@@ -94,13 +94,13 @@ def test_a_run_into_an_old_run_folder_leaves_none_of_its_files(capsys, tmp_path)
     out = tmp_path / "old"
     (out / "fields").mkdir(parents=True)
     for name in ("summary.json", "curve.png", "tool-section.png", "tool.xdmf", "fields.h5",
-                 "fields/fields-000040.h5", "notes.txt"):
+                 "sections-36.png", "fields/fields-000040.h5", "notes.txt"):
         (out / name).write_text("an older run")
     status, _, _ = run_main(capsys, "run", "column-elastic", "--json", "--out", out)
     assert status == 0
     assert json.loads((out / "summary.json").read_text())["scene"] == "column-elastic"
     assert not any((out / n).exists() for n in ("tool-section.png", "tool.xdmf", "fields.h5",
-                                                "fields/fields-000040.h5"))
+                                                "sections-36.png", "fields/fields-000040.h5"))
     assert (out / "notes.txt").read_text() == "an older run"   # not ours: kept
     assert len(read_series(out / "fields.xdmf")[2]) == 7
 

@@ -1,4 +1,6 @@
 """The tine in the soil bin: interface against bonded, the gap behind the tool, equilibrium."""
+import csv
+
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -62,3 +64,29 @@ def test_force_controlled_tool_reaches_the_draft_of_the_displacement_controlled_
     assert problem.tool.draft() == pytest.approx(pushed.force, rel=1e-6)
     assert pulled.displacement == pytest.approx(pushed.displacement, rel=0.01)
     assert max(pulled.residuals[1:]) < pulled.residuals[0]   # Newton with the border converges
+
+
+def test_embedded_half_model_reports_the_whole_tool():
+    """Across the symmetry plane the mesh of a 2-in embedded tool is that of a 1-in tool
+    against the glass wall: the whole embedded tool carries exactly twice the draft."""
+    _, wall = solve("mesh.tool_width=1")
+    _, embedded = solve("mesh.tool_width=2", "mesh.configuration=embedded")
+    assert embedded.force == pytest.approx(2.0 * wall.force, rel=1e-10)
+    assert embedded.columns["lift"] == pytest.approx(2.0 * wall.columns["lift"], rel=1e-10)
+
+
+def test_force_controlled_run_lands_on_the_stated_loads_and_draws_the_sections(tmp_path):
+    from soilbin.run import run_scene
+    from soilbin.scene import load_scene
+    from conftest import SCENES
+
+    overrides = [o for o in COARSE if not o.startswith(("loading.magnitude", "loading.steps"))]
+    scene = load_scene(SCENES / "tine-2in-90deg.toml",
+                       overrides + ["loading.control=force", "loading.magnitude=50",
+                                    "loading.steps=2", "output.at=[20.0, 50.0]"])
+    summary = run_scene(scene, tmp_path)
+    assert summary["status"] == "complete"
+    with open(tmp_path / "curve.csv") as f:
+        forces = [float(row["force"]) for row in csv.DictReader(f)]
+    assert forces == pytest.approx([20.0, 45.0, 50.0], rel=1e-9)
+    assert (tmp_path / "sections-20.png").is_file() and (tmp_path / "sections-50.png").is_file()

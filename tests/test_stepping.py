@@ -3,7 +3,7 @@ import pytest
 
 from soilbin.errors import ConvergenceError
 from soilbin.solver.newton import NewtonResult
-from soilbin.solver.stepping import run_load_steps
+from soilbin.solver.stepping import Observation, run_load_steps
 
 
 class CollapsingProblem:
@@ -28,7 +28,7 @@ class CollapsingProblem:
         self.trial = self.committed
 
     def observe(self):
-        return self.committed, 10 * self.committed
+        return Observation(self.committed, 10 * self.committed)
 
 
 def test_reaches_full_load_in_nominal_steps():
@@ -59,3 +59,9 @@ def test_increment_grows_back_after_a_cut():
     result = run_load_steps(Hiccup(limit=9.0), steps=2, max_cuts=3, on_step=lambda r: None)
     assert [r.load_factor for r in result.steps] == [0.5, 0.75, 1.0]
     assert [r.cuts for r in result.steps] == [0, 1, 0]
+
+
+def test_steps_land_on_the_stated_load_factors():
+    result = run_load_steps(CollapsingProblem(limit=2.0), steps=4, max_cuts=3,
+                            on_step=lambda r: None, stops=(0.3, 0.6))
+    assert [r.load_factor for r in result.steps] == pytest.approx([0.25, 0.3, 0.55, 0.6, 0.85, 1.0])

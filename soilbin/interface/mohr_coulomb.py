@@ -37,6 +37,10 @@ class MohrCoulombInterface(Params):
     def initial_state(self, n):
         return {"slip": np.zeros((n, 3))}
 
+    def bonded(self):
+        """The same penalty springs, never slipping or opening: a tool without interface."""
+        return BondedInterface(k_n=self.k_n, k_s=self.k_s)
+
     def traction_update(self, jump, normal, state):
         g = np.einsum("ij,ij->i", jump, normal)
         nn = normal[:, :, None] * normal[:, None, :]
@@ -67,3 +71,20 @@ class MohrCoulombInterface(Params):
                             + (self.k_s * ratio)[:, None, None] * (P_t - mm))
             tangent[slipping] = slip_tangent[slipping]
         return traction, tangent, {"slip": slip}
+
+
+@dataclasses.dataclass(frozen=True)
+class BondedInterface(Params):
+    """Soil glued to the tool by the penalty springs alone: t = k_n g n + k_s P_t jump,
+    in tension as in compression, with no slip (the dissertation's analyses "without
+    interface elements"). Linear; its history is an unused slip kept for a uniform state."""
+    k_n: float = param(lo=0.0, lo_open=True, doc="normal penalty stiffness (traction per length)")
+    k_s: float = param(lo=0.0, lo_open=True, doc="shear penalty stiffness (traction per length)")
+
+    history = MohrCoulombInterface.history
+    initial_state = MohrCoulombInterface.initial_state
+
+    def traction_update(self, jump, normal, state):
+        nn = normal[:, :, None] * normal[:, None, :]
+        tangent = self.k_n * nn + self.k_s * (np.eye(3) - nn)
+        return np.einsum("pij,pj->pi", tangent, jump), tangent, state

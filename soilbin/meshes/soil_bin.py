@@ -88,6 +88,11 @@ class SoilBinParams(Params):
         return self.tool_width / 2.0 if embedded else self.tool_width
 
     @property
+    def tool_share(self) -> float:
+        """The part of the whole tool the mesh holds: half across the symmetry plane."""
+        return 0.5 if Configuration(self.configuration) is Configuration.EMBEDDED else 1.0
+
+    @property
     def run(self) -> float:
         """How far the top of the blade lies behind its tip."""
         return self.tool_depth / math.tan(math.radians(self.rake_angle))

@@ -40,12 +40,13 @@ class SoilProblem:
 
         v = ufl.TestFunction(disc.space)
         self.supports = Supports(scene, tagged_mesh, disc, frame)
-        self.tool = (RigidTool(scene, tagged_mesh, disc, frame, self.kinematics, self.w, v,
-                               self.supports) if scene.tool is not None else None)
+        self.tool = (RigidTool(scene, tagged_mesh, disc, self.kinematics,
+                               frame.vector(scene.loading.direction), self.w, self.supports)
+                     if scene.tool is not None else None)
         self.drive = (self.tool if scene.loading.boundary == TOOL else
                       BoundaryLoad(scene, tagged_mesh, disc, frame, self.kinematics, self.supports,
                                    self.w, v))
-        self.bcs = self.supports.bcs + (self.tool.bcs if self.tool else [])
+        self.bcs = self.supports.bcs
         self.newton = self._newton(v)
 
     def _material_points(self):
@@ -62,12 +63,10 @@ class SoilProblem:
         """Residual = internal − dead loads − the driven traction (+ the tool's nodal terms)."""
         internal = self.kinematics.internal_force(self.points, v)
         dead = dead_loads(self.scene, self.tagged, self.disc, self.frame, self.kinematics, v)
-        soil_residual = internal if dead is None else internal - dead
-        driven = getattr(self.drive, "external", None)
-        residual = soil_residual if driven is None else soil_residual - driven
-        if self.tool is not None:
-            self.tool.measure_with(soil_residual)
+        residual = internal if dead is None else internal - dead
         if self.drive is not self.tool:
+            if self.drive.external is not None:
+                residual = residual - self.drive.external
             self.drive.measure_with(internal)
         jacobian = self.kinematics.jacobian(residual, self.points,
                                             ufl.TrialFunction(self.disc.space), v)
@@ -94,9 +93,9 @@ class SoilProblem:
         return self.kinematics.moves_mesh
 
     @property
-    def area(self):
-        """Area of the driven boundary (current configuration); collective."""
-        return self.drive.area
+    def curve_columns(self):
+        """Names of the values each observation carries beside displacement and force."""
+        return self.drive.columns
 
     def update_material_state(self):
         """The constitutive and interface updates of one Newton iterate."""

@@ -47,6 +47,10 @@ class SmallStrain:
         """The displacement from the initial configuration (UFL)."""
         return self._disc.displacement(self._w)
 
+    def volume_change(self):
+        """Volumetric strain since the initial configuration, ε_v = div u (UFL)."""
+        return ufl.div(self.total_displacement())
+
     def displacement_p1(self):
         """The total displacement as a P1 Function (for output)."""
         if self._p1 is None:
@@ -94,6 +98,10 @@ class UpdatedLagrangian:
 
     def total_displacement(self):
         return self._motion.total
+
+    def volume_change(self):
+        """dV/dV0 − 1 = 1/det(I − ∇u) − 1, with u the total displacement on the current mesh."""
+        return 1.0 / ufl.det(ufl.Identity(3) - ufl.grad(self._motion.total)) - 1.0
 
     def displacement_p1(self):
         return self._motion.total

@@ -17,6 +17,7 @@ import dolfinx.fem.petsc  # noqa: F401
 
 from ..errors import InputError
 from ..scene import TOOL, Control
+from ..solver.stepping import Observation
 from ..tensors import ufl_from_mandel
 
 
@@ -109,6 +110,8 @@ def dead_loads(scene, tagged, disc, frame, kinematics, v):
 class BoundaryLoad:
     """A facet group driven by the load factor: a traction (force control) or a displacement
     (displacement control, through the supports' prescribed values)."""
+    #: Per-step values beside displacement and force (see :meth:`observe`).
+    columns = ("pressure",)
 
     def __init__(self, scene, tagged, disc, frame, kinematics, supports, w, v):
         loading = scene.loading
@@ -148,8 +151,12 @@ class BoundaryLoad:
         return assemble_total(self._area)
 
     def observe(self):
-        """(mean displacement, force) along the loading direction; collective."""
-        return assemble_total(self._displacement) / self.area, assemble_total(self._force)
+        """Mean displacement and force along the loading direction, and the pressure: the
+        force over the boundary's current area (its initial area in small deformation);
+        collective."""
+        force, area = assemble_total(self._force), self.area
+        return Observation(assemble_total(self._displacement) / area, force,
+                           {"pressure": force / area})
 
 
 def assemble_total(form):

@@ -1,6 +1,7 @@
 """Incremental loading with step cutting.
 
-The load factor goes from 0 to 1 in the scene's equal steps. A step whose
+The load factor goes from 0 to 1 in the scene's equal steps, landing exactly
+on any stated load factors (``stops``) on the way. A step whose
 Newton solve fails is rolled back and halved; the increment never goes below
 the nominal one over 2**max_cuts, which ends the run (under force control,
 at the collapse load to that resolution). After a step that converged
@@ -34,8 +35,15 @@ class SteppedProblem(Protocol):
     def roll_back(self) -> None:
         """Back to the last committed state after a failed solve."""
 
-    def observe(self) -> tuple[float, float]:
-        """(displacement, force) along the loading direction at the committed state."""
+    def observe(self) -> "Observation":
+        """What the converged state shows along the loading direction."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Observation:
+    displacement: float     # of the driven boundary or tool, along the loading direction
+    force: float            # on it, along the loading direction
+    columns: dict = dataclasses.field(default_factory=dict)   # further named values per step
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,6 +56,7 @@ class StepRecord:
     cuts: int
     wall_s: float
     residuals: tuple
+    columns: dict = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,13 +66,17 @@ class StepperResult:
     message: str            # why it stopped early ('' when complete)
 
 
-def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter):
-    """Drive ``problem`` to load factor 1."""
+def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter,
+                   stops=()):
+    """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors)."""
     nominal = 1.0 / steps
     level, factor, cuts = 0, 0.0, 0      # increment = nominal / 2**level
     records, start = [], clock()
     while factor < 1.0 - 1e-12:
         increment = min(nominal / 2**level, 1.0 - factor)
+        stop = min((s for s in stops if s > factor + 1e-12), default=None)
+        if stop is not None and factor + increment > stop:
+            increment = stop - factor
         problem.set_load_factor(factor + increment)
         try:
             result = problem.solve()
@@ -78,9 +91,9 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
             continue
         factor += increment
         problem.commit()
-        displacement, force = problem.observe()
-        record = StepRecord(len(records) + 1, factor, displacement, force,
-                            result.iterations, cuts, clock() - start, result.residuals)
+        seen = problem.observe()
+        record = StepRecord(len(records) + 1, factor, seen.displacement, seen.force,
+                            result.iterations, cuts, clock() - start, result.residuals, seen.columns)
         records.append(record)
         on_step(record)
         if cuts == 0:

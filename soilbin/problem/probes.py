@@ -1,0 +1,45 @@
+"""Where things are on the initial mesh: the nodes of a face, the cell in front of it,
+and a value evaluated in one cell (on whichever rank owns it)."""
+import numpy as np
+from mpi4py import MPI
+from dolfinx import fem
+from dolfinx.mesh import compute_midpoints
+
+from .loads import facets
+
+
+def face_nodes(tagged, name):
+    """Coordinates (n, 3) of the mesh nodes on a facet group (owned by this rank)."""
+    mesh = tagged.mesh
+    V1 = fem.FunctionSpace(mesh, ("Lagrange", 1))
+    dofs = fem.locate_dofs_topological(V1, mesh.topology.dim - 1, facets(tagged, name))
+    owned = dofs[dofs < V1.dofmap.index_map.size_local]
+    return V1.tabulate_dof_coordinates()[owned]
+
+
+def cell_ahead(mesh, point, direction):
+    """The local index of the cell whose midpoint lies ahead of ``point`` along ``direction``
+    and nearest to it, on the one rank that holds it (-1 on the others)."""
+    n_owned = mesh.topology.index_map(mesh.topology.dim).size_local
+    cells = np.arange(n_owned, dtype=np.int32)
+    midpoints = compute_midpoints(mesh, mesh.topology.dim, cells)
+    ahead = (midpoints - point) @ direction > 0.0
+    distance = np.linalg.norm(midpoints - point, axis=1)
+    distance[~ahead] = np.inf
+    local = int(np.argmin(distance)) if len(cells) else -1
+    best = (distance[local] if local >= 0 else np.inf, mesh.comm.rank)
+    winner = mesh.comm.allreduce(best, op=MPI.MIN)
+    return local if winner[1] == mesh.comm.rank else -1
+
+
+class CellValue:
+    """A scalar UFL expression at the midpoint of one cell, returned on every rank."""
+
+    def __init__(self, mesh, expression, cell):
+        self._expression = fem.Expression(expression, np.array([[0.5, 0.5, 0.5]]))
+        self._cell, self._comm = cell, mesh.comm
+
+    def __call__(self):
+        local = (float(self._expression.eval(np.array([self._cell], dtype=np.int32)).ravel()[0])
+                 if self._cell >= 0 else 0.0)
+        return self._comm.allreduce(local, op=MPI.SUM)

@@ -1,0 +1,90 @@
+"""The displacement fields of figures 8.10–8.12: three sections around the tool at a stated load.
+
+(a) the vertical section through the tool's centre line (x–z), (b) the
+horizontal section at the tool's tip depth (x–y), (c) the bin surface (x–y).
+Each panel draws the in-plane soil displacement at the mesh nodes of that
+plane as arrows (one scale for the figure, with a reference arrow) on the
+initial geometry, and the tool's faces cut by the plane. Data are gathered
+to rank 0, which draws.
+"""
+import numpy as np
+from mpi4py import MPI
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def _node_plane(coordinates, target, comm):
+    """The coordinate of the plane of mesh nodes nearest to ``target`` (all ranks agree)."""
+    local = coordinates[np.argmin(np.abs(coordinates - target))] if len(coordinates) else np.inf
+    candidates = comm.allgather(local)
+    return min(candidates, key=lambda c: abs(c - target))
+
+
+def _sections(problem):
+    """(title, normal axis, plane coordinate, in-plane axes) of the three sections."""
+    comm = problem.comm
+    tool = np.concatenate(list(problem.tool.face_points.values()))
+    low = comm.allreduce(tool.min(axis=0, initial=np.inf), op=MPI.MIN)
+    high = comm.allreduce(tool.max(axis=0, initial=-np.inf), op=MPI.MAX)
+    # across a symmetry plane the tool's centre line is that plane, y = low
+    centre = low[1] if problem.tool.share < 1.0 else 0.5 * (low[1] + high[1])
+    return [("vertical section through the tool's centre line", 1, centre, (0, 2)),
+            ("horizontal section at the tool's tip depth", 2, low[2], (0, 1)),
+            ("bin surface", 2, high[2], (0, 1))], low, high
+
+
+def sections_png(problem, scene, load, path):
+    """One PNG of the three sections at the current (converged) state; collective."""
+    comm = problem.comm
+    u = problem.displacement()
+    owned = u.function_space.dofmap.index_map.size_local
+    displacement = u.x.array.reshape(-1, 3)[:owned]
+    x = u.function_space.tabulate_dof_coordinates()[:owned] - displacement * problem.moves_mesh
+    sections, low, high = _sections(problem)
+    panels = []
+    for title, normal, target, axes in sections:
+        plane = _node_plane(x[:, normal], target, comm)
+        on = np.isclose(x[:, normal], plane, atol=1e-9 * (1.0 + abs(plane)))
+        tool = np.concatenate(list(problem.tool.face_points.values()))
+        tool_on = np.isclose(tool[:, normal], plane, atol=1e-9 * (1.0 + abs(plane)))
+        parts = comm.gather((x[on][:, axes], displacement[on][:, axes], tool[tool_on][:, axes]),
+                            root=0)
+        if comm.rank == 0:
+            panels.append((title, normal, plane, axes, *(np.concatenate(p) for p in zip(*parts))))
+    if comm.rank == 0:
+        _draw(panels, low, high, scene, load, path)
+
+
+def _draw(panels, low, high, scene, load, path):
+    size = high - low
+    reach = 1.5 * max(size.max(), 1e-12)   # the tool depth or width, whichever larger
+    scale = max(np.abs(p[5]).max(initial=0.0) for p in panels) or 1.0
+    fig, axs = plt.subplots(3, 1, figsize=(7, 12))
+    for ax, (title, normal, plane, axes, xs, us, tool) in zip(axs, panels):
+        a, b = axes
+        arrows = ax.quiver(xs[:, 0], xs[:, 1], us[:, 0], us[:, 1], np.hypot(us[:, 0], us[:, 1]),
+                           angles="xy", scale_units="xy", scale=scale / (0.25 * reach),
+                           cmap="viridis", width=0.0025)
+        ax.scatter(tool[:, 0], tool[:, 1], s=6, c="k", label="tool")
+        ax.quiverkey(arrows, 0.85, 0.92, scale, f"{scale:.3g} {_unit(scene, 1)}",
+                     labelpos="W", coordinates="axes", fontproperties={"size": 8})
+        ax.set_xlim(low[a] - reach, high[a] + reach)
+        ax.set_ylim(max(low[b] - reach, xs[:, 1].min()), min(high[b] + reach, xs[:, 1].max()))
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"{'xyz'[a]} [{_unit(scene, 1)}]")
+        ax.set_ylabel(f"{'xyz'[b]} [{_unit(scene, 1)}]")
+        ax.set_title(f"{title}, {'xyz'[normal]} = {np.round(plane, 9) + 0.0:.3g}", fontsize=9)
+        fig.colorbar(arrows, ax=ax, label=f"in-plane displacement [{_unit(scene, 1)}]")
+    fig.suptitle(f"{scene.name}: soil displacement at draft {load:g} {_unit(scene, 0)} "
+                 "(arrows on the initial geometry; black: the tool's faces)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _unit(scene, which):
+    """The force (0) or length (1) unit of a scene's units string ('lb, in (...)')."""
+    parts = [p.strip() for p in scene.units.split("(")[0].split(",")]
+    return parts[which] if len(parts) > 1 else scene.units
