@@ -1,7 +1,9 @@
-"""Perfectly plastic, associated Drucker–Prager (dissertation eq. B.2)."""
+"""Perfectly plastic Drucker–Prager (dissertation eq. B.2), associated by default,
+with a dilation angle psi for non-associated flow."""
 import dataclasses
 import math
 
+from ..errors import InputError
 from ..params import param
 from .cone import ConeModel, tension_cutoff_param
 from .matching import Matching
@@ -9,8 +11,10 @@ from .matching import Matching
 
 @dataclasses.dataclass(frozen=True)
 class DruckerPrager(ConeModel):
-    """f = alpha I1 + sqrt(J2) - k, with alpha, k matched to Mohr–Coulomb c, phi,
-    and optionally the tension cut-off p = I1/3 <= tension_cutoff (see .cone)."""
+    """f = alpha I1 + sqrt(J2) - k, with alpha, k matched to Mohr–Coulomb c, phi;
+    flow potential g = alpha_psi I1 + sqrt(J2), alpha_psi matched to psi as alpha
+    to phi (psi = phi, the default: associated flow); optionally the tension
+    cut-off p = I1/3 <= tension_cutoff (see .cone)."""
 
     c: float = param(lo=0.0, hi=math.inf, hi_open=True, doc="Mohr–Coulomb cohesion")
     phi: float = param(lo=0.0, hi=90.0, hi_open=True,
@@ -18,8 +22,22 @@ class DruckerPrager(ConeModel):
     matching: Matching = param(doc="fit of the cone to Mohr–Coulomb: "
                                    + " or ".join(m.value for m in Matching))
     tension_cutoff: float = tension_cutoff_param()
+    psi: float = param(math.nan, doc="dilation angle [degrees], in [0, phi]; "
+                                     "nan (the default) means psi = phi: associated flow")
+
+    def __post_init__(self):
+        if math.isnan(self.psi):
+            object.__setattr__(self, "psi", self.phi)
+        super().__post_init__()
+        if not 0.0 <= self.psi <= self.phi:
+            raise InputError(f"psi = {self.psi!r} is outside the accepted range "
+                             f"[0, phi = {self.phi:g}]")
 
     @property
     def cone(self):
         alpha, k = self.matching.coefficients(self.c, self.phi)
         return 3.0 * alpha, k
+
+    @property
+    def flow_slope(self):
+        return 3.0 * self.matching.coefficients(self.c, self.psi)[0]
