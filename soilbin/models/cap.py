@@ -58,12 +58,6 @@ and the corners are fixed during a step; the cap's normal at its corner
                 p_lo = max(apex, -T): the apex, or its corner with the cut-off
     cut-off     p_tr < p_lo and J_tr < F(3 p_lo)               p = p_lo, s = s_tr
 
-The cap return is a local Newton (:func:`.invariant_return.smooth_return`);
-where it fails (trials far beyond the cap, as a diverging global iterate hands
-them over) the same backward-Euler problem is solved by two nested bracketed
-scalar solves, which cannot stagnate (:meth:`CapModel._cap_bracketed`), and
-polished by Newton from that solution for the consistent tangent.
-
 History: ``stress``, ``cap_L``, ``cap_X`` (compression-positive I1),
 ``eps_p_vol`` (trace of the plastic strain, tension positive), ``eps_p_eq``
 and ``yield_state``: 0 elastic, 1 failure surface, 2 apex or corner of
@@ -255,108 +249,35 @@ class CapModel(IsotropicElasticity):
         response.solved(idx, p, F, p_e, p_J, 3.0 * dF * p_e, 3.0 * dF * p_J, FAILURE)
 
     def _cap_return(self, trial, bulk, idx, p_tr, L_n, scale, L_min, response):
-        """Return onto the hardening cap (smooth_return with h = L); returns L.
-        Points where the local Newton fails are solved by the bracketed
-        :meth:`_cap_bracketed` and polished by Newton from that solution."""
+        """Return onto the hardening cap (smooth_return with h = L); returns L."""
         R = self.R
+
+        def surface(p, J, L, k):
+            F, dF, _ = self.failure(L)
+            a = (3.0 * p - L) / R
+            rho = np.hypot(a, J)
+            r3 = rho**3
+            return (rho - F, 3.0 * a / (R * rho), J / rho, -a / (R * rho) - dF,
+                    9.0 * J**2 / (R**2 * r3), -3.0 * a * J / (R * r3), a**2 / r3,
+                    -3.0 * J**2 / (R**2 * r3), a * J / (R * r3), scale[k])
+
+        def admissible(p, J, L, k):
+            return L >= L_min
+
         # Hardening (B.11): W (1 - exp(-D X(L))) - W (1 - exp(-D X(L_n))) = compaction.
         H_n = self.compaction(L_n)[0]
 
-        def solve(sel, x0):
-            def surface(p, J, L, k):
-                F, dF, _ = self.failure(L)
-                a = (3.0 * p - L) / R
-                rho = np.hypot(a, J)
-                r3 = rho**3
-                return (rho - F, 3.0 * a / (R * rho), J / rho, -a / (R * rho) - dF,
-                        9.0 * J**2 / (R**2 * r3), -3.0 * a * J / (R * r3), a**2 / r3,
-                        -3.0 * J**2 / (R**2 * r3), a * J / (R * r3), scale[sel[k]])
+        def hardening(L, compaction, k):
+            H, dH = self.compaction(L)
+            return H - H_n[k] - compaction, dH, -np.ones_like(L)
 
-            def admissible(p, J, L, k):
-                return L >= L_min
-
-            def hardening(L, compaction, k):
-                H, dH = self.compaction(L)
-                return H - H_n[sel[k]] - compaction, dH, -np.ones_like(L)
-
-            return smooth_return(surface, hardening, bulk, self.G, trial, idx[sel], p_tr[sel],
-                                 L_n[sel], x0, scale[sel], admissible=admissible)
-
-        every = np.arange(idx.size)
         x0 = np.stack([p_tr, trial.J_tr[idx], np.zeros(idx.size), L_n], axis=1)
-        p, J, _, L, sens, converged = solve(every, x0)
-        failed = np.flatnonzero(~converged)
-        if failed.size:
-            xb = self._cap_bracketed(p_tr[failed], trial.J_tr[idx[failed]], L_n[failed],
-                                     H_n[failed], L_min)
-            pb, Jb, _, Lb, sensb, cb = solve(failed, xb)
-            p[failed], J[failed], L[failed], converged[failed] = pb, Jb, Lb, cb
-            sens = tuple(np.where(np.isin(every, failed), 0.0, v) for v in sens)
-            for v, vb in zip(sens, sensb):
-                v[failed] = vb
+        p, J, _, L, sens, converged = smooth_return(
+            surface, hardening, bulk, self.G, trial, idx, p_tr, L_n, x0, scale,
+            admissible=admissible)
         check_converged(self, converged, len(trial.p_n))
         response.solved(idx, p, J, *sens, CAP)
         return L
-
-    def _cap_bracketed(self, p_tr, J_tr, L_n, H_n, L_min):
-        """The cap return by nested bracketed scalar solves, for any finite trial
-        state on the cap side (p_tr > L_n / 3 and outside the cap): (m, 4) rows
-        (p, J, dgamma, L) of the local problem of :func:`smooth_return`.
-
-        For a given cap position L, associated flow on the ellipse
-        rho = sqrt(a^2 + J^2) = F(L), a = (3p - L)/R, with mu = dgamma / rho gives
-        a = a_tr / (1 + 9 K mu / R^2), J = J_tr / (1 + G mu) (eq. B.10 with the
-        elastic split); rho decreases with mu, so mu is the bracketed root of
-        rho(mu) = F(L) on [0, (rho_tr / F - 1) / min(9K/R^2, G)]. The plastic
-        compaction (p_tr - p(L)) / K decreases with L while the hardening
-        H(L) - H(L_n) (B.11) increases, so L is the bisection root of their
-        difference between L_n and a cap through (or beyond) the trial.
-        """
-        K, G, R = self.K, self.G, self.R
-        m = len(p_tr)
-        cK, cG = 9.0 * K / R**2, G
-
-        def on_cap(L):
-            """(p, J, mu) of the return onto the fixed ellipse at L."""
-            F = np.maximum(self.failure(L)[0], np.finfo(float).tiny)
-            a_tr = (3.0 * p_tr - L) / R
-            rho_tr = np.hypot(a_tr, J_tr)
-            lo = np.zeros(m)
-            hi = np.maximum(rho_tr / F - 1.0, 0.0) / min(cK, cG)
-
-            def g(mu, k):   # F^2 - rho(mu)^2, increasing in mu
-                a = a_tr[k] / (1.0 + cK * mu)
-                J = J_tr[k] / (1.0 + cG * mu)
-                return (F[k]**2 - a**2 - J**2,
-                        2.0 * a**2 * cK / (1.0 + cK * mu) + 2.0 * J**2 * cG / (1.0 + cG * mu))
-
-            mu, _ = scalar_root(g, lo, hi)
-            a = a_tr / (1.0 + cK * mu)
-            return (L + R * a) / 3.0, J_tr / (1.0 + cG * mu), mu * np.hypot(a, J_tr / (1.0 + cG * mu))
-
-        def phi(L):   # H(L) - H_n - plastic compaction, increasing in L
-            return self.compaction(L)[0] - H_n - (p_tr - on_cap(L)[0]) / K
-
-        lo = np.maximum(L_n, L_min)
-        width = np.maximum(np.abs(3.0 * p_tr - lo), 1.0)
-        hi = lo + width
-        for _ in range(2100):   # grow the bracket: phi -> W - H_n > 0 as L -> inf
-            short = phi(hi) < 0.0
-            if not short.any():
-                break
-            width = np.where(short, 2.0 * width, width)
-            hi = np.where(short, lo + width, hi)
-        for _ in range(2100):   # bisection to rounding
-            mid = 0.5 * (lo + hi)
-            done = (mid <= lo) | (mid >= hi)
-            if done.all():
-                break
-            neg = phi(mid) < 0.0
-            lo = np.where(neg & ~done, mid, lo)
-            hi = np.where(~neg & ~done, mid, hi)
-        L = hi
-        p, J, dgamma = on_cap(L)
-        return np.stack([p, J, dgamma, L], axis=1)
 
 
 @dataclasses.dataclass(frozen=True)
