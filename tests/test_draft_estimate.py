@@ -138,16 +138,18 @@ def test_each_tool_scene_gets_the_estimate_of_the_whole_tool():
     from soilbin.scene import load_scene
 
     scene = ROOT / "scenes" / "tine-2in-90deg.toml"
-    wall = draft_estimate(load_scene(scene))
+    dp = ["regions.soil=drucker_prager", "materials.drucker_prager.c=0.05"]
+    wall = draft_estimate(load_scene(scene, dp))
     assert wall == narrow_tine_draft(2.0, 6.0, 90.0, phi=33.0, delta=22.0, gamma=0.072, c=0.05,
                                      crescents=1)
-    embedded = draft_estimate(load_scene(scene, ["mesh.configuration=embedded",
-                                                 "mesh.rake_angle=45"]))
+    embedded = draft_estimate(load_scene(scene, dp + ["mesh.configuration=embedded",
+                                                      "mesh.rake_angle=45"]))
     whole = narrow_tine_draft(2.0, 6.0, 45.0, phi=33.0, delta=22.0, gamma=0.072, c=0.05)
     assert embedded == whole     # the FE reports the whole tool across the symmetry plane
-    bonded = draft_estimate(load_scene(scene, ["tool.bonded=true"]))
+    bonded = draft_estimate(load_scene(scene, dp + ["tool.bonded=true"]))
     assert bonded == narrow_tine_draft(2.0, 6.0, 90.0, phi=33.0, delta=33.0, gamma=0.072, c=0.05,
                                        c_a=0.05, crescents=1)
+    assert draft_estimate(load_scene(scene)) is None   # the cap soil has no c, phi
     assert draft_estimate(load_scene(ROOT / "scenes" / "column-elastic.toml")) is None
 
 

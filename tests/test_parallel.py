@@ -41,7 +41,7 @@ def test_force_controlled_tine_with_progress_lines_matches_serial(tmp_path):
     progress lines are printed (rank 0 alone must not evaluate a collective for them)."""
     coarse = ["mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "mesh.behind=10.0",
               "mesh.bin_width=10.0", "loading.control=force", "loading.magnitude=60",
-              "loading.steps=3"]
+              "loading.steps=3", "regions.soil=drucker_prager", "materials.drucker_prager.c=0.05"]
     sets = [arg for key in coarse for arg in ("--set", key)]
     curves = {}
     for ranks in (1, 2):

@@ -23,7 +23,8 @@ def test_the_records_layer_loads_no_fenicsx_gmsh_or_mpi():
             "import soilbin.scene, soilbin.params, soilbin.meshes, soilbin.models, soilbin.elements\n"
             "import soilbin.pointdriver, soilbin.cli\n"
             "from soilbin.scene import load_scene\n"
-            f"load_scene({str(TINE)!r}, ['geostatic.K0=jaky']).resolved()\n"
+            f"load_scene({str(TINE)!r}, ['geostatic.K0=jaky', 'regions.soil=drucker_prager'])"
+            ".resolved()\n"
             "print(' '.join(sorted({m.split('.')[0] for m in sys.modules})))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                           check=True)
@@ -82,9 +83,9 @@ def test_the_2in_tine_mesh_is_unchanged():
     assert (mesh.length, mesh.bin_width, mesh.bin_depth) == (36.5, 18.0, 12.0)
 
 
-@pytest.mark.parametrize("overrides, phi", [([], 33.0), (["materials.soil.phi=25"], 25.0)])
+@pytest.mark.parametrize("overrides, phi", [([], 33.0), (["materials.drucker_prager.phi=25"], 25.0)])
 def test_jaky_K0_follows_the_friction_angle_and_is_written_as_a_number(overrides, phi):
-    scene = load_scene(TINE, ["geostatic.K0=jaky", *overrides])
+    scene = load_scene(TINE, ["geostatic.K0=jaky", "regions.soil=drucker_prager", *overrides])
     K0 = 1.0 - math.sin(math.radians(phi))
     assert scene.geostatic.K0 == K0
     assert f"K0 = {K0!r}" in scene.resolved()

@@ -163,12 +163,12 @@ def test_keys_lists_every_settable_key_and_each_one_sets(capsys):
     assert status == 0 and "units: lb, in" in out.splitlines()[0]
     scene = load_scene(SCENES / "tine-2in-90deg.toml")
     rows = scene_keys(scene)
-    for key in ("mesh.rake_angle", "materials.soil.phi", "tool.interface.c_a", "geostatic.K0",
-                "loading.steps", "supports.0.fix", "output.fields", "solver.rtol"):
+    for key in ("mesh.rake_angle", "materials.drucker_prager.phi", "tool.interface.c_a",
+                "geostatic.K0", "loading.steps", "supports.0.fix", "output.fields", "solver.rtol"):
         assert any(line.split()[0] == key for line in out.splitlines()[2:]), key
     assert len(out.splitlines()) == len(rows) + 2
-    phi = next(line for line in out.splitlines() if line.startswith("materials.soil.phi "))
-    assert "[0, 90)" in phi and str(scene.materials["soil"].phi) in phi
+    phi = next(line for line in out.splitlines() if line.startswith("materials.drucker_prager.phi "))
+    assert "[0, 90)" in phi and str(scene.materials["drucker_prager"].phi) in phi
     for key, value, _, _ in rows:   # every key listed is one --set takes, with its own value
         text = toml_out.dumps({"v": value}).strip()[len("v = "):]
         assert load_scene(scene.path, [f"{key}={text}"]) == scene, key
