@@ -166,7 +166,8 @@ class Solver(Params):
     atol: float = param(1e-10, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
                         doc="residual floor relative to the run's force scale")
     max_iterations: int = param(25, lo=1, hi=200, doc="Newton iterations before the step is cut")
-    line_search: LineSearch = param(LineSearch.BASIC, doc="basic (full steps) or bt (backtracking)")
+    line_search: LineSearch = param(LineSearch.BACKTRACKING,
+                                    doc="basic (full steps) or bt (backtracking, halving)")
     linear: LinearSolverKind = param(LinearSolverKind.AUTO,
                                      doc="linear solver: auto, lu, cholesky (LDLT) or amg")
 

@@ -15,8 +15,10 @@ solved by block elimination with the one factorisation of K:
 K x = −R, K z = b, Δa = (−g − c·x) / (d − c·z), Δw = x − z Δa.
 
 A step that is not going to converge is cut early: as soon as the residual
-exceeds ``DIVERGENCE`` times the step's first, or has not reached a new
-minimum for ``STAGNATION`` iterations. ``stats`` accumulates the CPU time of
+exceeds ``DIVERGENCE`` times the step's first, has grown in two successive
+iterations, or has not reached a new minimum for ``STAGNATION`` iterations
+(on the footing, every step that later diverged had grown twice in a row
+first, and no converged step had). ``stats`` accumulates the CPU time of
 each part of an iterate (constitutive update, assembly, factorisation,
 solves) and the iterations of converged and failed solves.
 """
@@ -55,8 +57,6 @@ MAX_BACKTRACKS = 6
 DIVERGENCE = 10.0
 #: Iterations without a new smallest residual that end the step.
 STAGNATION = 5
-#: Form-compiler flags for the residual and Jacobian kernels.
-JIT_PARAMS = {"cffi_extra_compile_args": ["-O3", "-march=native"]}
 
 
 class _Clock:
@@ -87,8 +87,7 @@ class NewtonSolver:
         ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d, ``move(da)``,
         ``value``/``set_value(a)``; ``symmetric``: whether the Jacobian can be symmetric
         (then ``symmetric_tangent()`` says whether it is at the current iterate)."""
-        self._L = fem.form(residual, jit_params=JIT_PARAMS)
-        self._a = fem.form(jacobian, jit_params=JIT_PARAMS)
+        self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
         self._nodal_terms = tuple(nodal_terms)
         self._border = border
@@ -215,6 +214,9 @@ class NewtonSolver:
         if residuals[-1] > DIVERGENCE * residuals[0]:
             raise NewtonFailure(f"Newton diverged (residual {residuals[-1]:.3g}, "
                                 f"{DIVERGENCE:g} times the first) after {n} iterations")
+        if n >= 2 and residuals[-1] > residuals[-2] > residuals[-3]:
+            raise NewtonFailure(f"Newton diverged (the residual grew in two successive "
+                                f"iterations) after {n} iterations")
         if n > STAGNATION and min(residuals[-STAGNATION:]) >= min(residuals[:-STAGNATION]):
             raise NewtonFailure(f"Newton stagnated ({STAGNATION} iterations without a "
                                 f"smaller residual) after {n} iterations")
