@@ -15,8 +15,10 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
   condensed first (``condensation.CellCondensation``: the cell dilatation
   and pressure eliminated exactly), since AMG needs a displacement system.
 
-Both factorisations use the PORD ordering (measured faster than MUMPS's
-automatic choice on the footing and the tine, by 0-35% for LDLᵀ).
+Both factorisations use the PORD ordering above ``PORD_DOFS`` unknowns
+(measured faster than MUMPS's automatic choice on the footing and the tine,
+by 0-45% for LDLᵀ); PORD aborts the process on some tiny graphs (a
+one-element column: "no valid number of stages in multisector").
 """
 import time
 
@@ -28,6 +30,8 @@ from .condensation import CellCondensation, Uncondensed
 
 #: Above this many unknowns ``auto`` takes the iterative solver.
 AMG_DOFS = 300_000
+#: From this many unknowns on, MUMPS orders with PORD (below: its automatic choice).
+PORD_DOFS = 5000
 #: Krylov tolerance relative to the right-hand side (Newton's rtol is 1e-9).
 KRYLOV_RTOL = 1e-10
 
@@ -36,11 +40,12 @@ class LinearSolveError(ConvergenceError):
     """The linear solve failed (singular factor, Krylov divergence); the step is cut."""
 
 
-def _mumps(ksp, prefix, factor):
+def _mumps(ksp, prefix, factor, n_dofs):
     ksp.setOptionsPrefix(prefix)
     options = PETSc.Options(prefix)
     for key, value in {"ksp_type": "preonly", "pc_type": factor,
-                       "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_7": 4,
+                       "pc_factor_mat_solver_type": "mumps",
+                       "mat_mumps_icntl_7": 4 if n_dofs >= PORD_DOFS else 7,
                        # null pivots (soil yielded at the apex, zero tangent) are detected and
                        # their solution components set to zero, not an abort
                        "mat_mumps_icntl_24": 1}.items():
@@ -62,14 +67,14 @@ class LinearSolver:
         self.stats = dict(factorisation_s=0.0, solve_s=0.0, solves=0, krylov_iterations=0,
                           unsymmetric_solves=0)
         self._lu = PETSc.KSP().create(comm)
-        _mumps(self._lu, prefix + "lu_", "lu")
+        _mumps(self._lu, prefix + "lu_", "lu", n_dofs)
         self._condensed = None
         self._symmetric = symmetric
         self._ksp = PETSc.KSP().create(comm)
         if kind is LinearSolverKind.LU:
             return
         if kind is LinearSolverKind.CHOLESKY:
-            _mumps(self._ksp, prefix + "ldlt_", "cholesky")
+            _mumps(self._ksp, prefix + "ldlt_", "cholesky", n_dofs)
             return
         if disc.element.mixed and disc.element.degree == 2 and kind is LinearSolverKind.AMG:
             raise InputError(f"solver.linear = amg: not for {disc.element.value} (its cell "
