@@ -35,10 +35,11 @@ def cases(quick):
     for r in (1, 2) if quick else (1, 2, 3, 4):
         yield f"footing, refine={r}", FOOTING, [f"mesh.refine={r}"]
     yield "footing, refine=2, LU", FOOTING, ["mesh.refine=2", "solver.linear=lu"]
-    yield "footing, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"]
+    yield "footing hex8, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"]
     if not quick:   # hex27-bbar takes minutes
         for r in (1, 2):
-            yield f"footing, refine={r}", FOOTING, [f"mesh.refine={r}", "analysis.element=hex27-bbar"]
+            yield (f"footing hex27-bbar, refine={r}", FOOTING,
+                   [f"mesh.refine={r}", "analysis.element=hex27-bbar"])
     yield "column, nz=24", COLUMN, ["mesh.nz=24"]
     yield "tine, refine=1", TINE, []
     if quick:
