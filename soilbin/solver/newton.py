@@ -1,4 +1,4 @@
-"""Newton's method for one load step, with a MUMPS LU solve per iterate.
+"""Newton's method for one load step, with one factorisation (or AMG set-up) per iterate.
 
 The residual evaluation runs the constitutive update once per iterate; the
 Jacobian, assembled at the same iterate, reuses its tangent. Convergence is
@@ -78,8 +78,7 @@ class _Clock:
 
 class NewtonSolver:
     def __init__(self, comm, residual, jacobian, w, bcs, before_residual, options, disc,
-                 prefix="soil_",
-                 nodal_terms=(), border=None, symmetric=False,
+                 prefix="soil_", nodal_terms=(), border=None, symmetric=False,
                  symmetric_tangent=lambda: True):
         """``before_residual()`` runs after ``w`` is set to an iterate, before assembly;
         ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``);
@@ -163,18 +162,15 @@ class NewtonSolver:
             self.jacobian(self.matrix)
         self.linear.set_operator(self.matrix, self._symmetric_tangent)
         self._b.scale(-1.0)
-        self._linear_solve(self._b, self._dx)
+        self.linear.solve(self._b, self._dx)
         if self._border is None:
             return 0.0
         b, c, z = self._border_b, self._border_c, self._border_z
         d = self._border.linearise(b, c)
-        self._linear_solve(b, z)
+        self.linear.solve(b, z)
         da = (-self._border.residual() - c.dot(self._dx)) / (d - c.dot(z))
         self._dx.axpy(-da, z)
         return da
-
-    def _linear_solve(self, rhs, x):
-        self.linear.solve(rhs, x)
 
     def _set_iterate(self, x, a, dx, da, step):
         """w = x + step dx (and a + step da)."""
