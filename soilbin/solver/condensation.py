@@ -9,8 +9,9 @@ is solved exactly through the displacement-only Schur complement
 S = K − Z D⁻¹ Zr (the B-bar stiffness): S x_u = r_u − Z D⁻¹ r_c, then
 x_c = D⁻¹ (r_c − Zr x_u). The blocks are submatrices of the assembled
 mixed matrix, D⁻¹ is formed cell by cell in NumPy, S by two sparse
-products; S keeps the sparsity of K, so a factorisation's symbolic phase
-is done once. Dirichlet rows of the mixed matrix are identity rows with
+products, in the matrix of K (its sparsity holds them). It is what the AMG
+solver works on; for the direct solvers it did not pay (forming S cost
+about what factorising S instead of the mixed matrix saved). Dirichlet rows of the mixed matrix are identity rows with
 zero columns, so they stay identity rows of S.
 """
 import numpy as np
