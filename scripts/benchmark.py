@@ -88,10 +88,10 @@ def run_case(scene_name, overrides):
 
     scene = load_scene(ROOT / "scenes" / f"{scene_name}.toml", overrides)
     problem = SoilProblem(scene, BUILDERS[scene.mesh_builder].build(scene.mesh, MPI.COMM_WORLD))
-    area = problem.area
     setup = time.process_time() - start
     result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None)
     solve = time.process_time() - start - setup
+    area = problem.area   # of the current configuration, as the run's summary
     newton, linear = problem.newton.stats, problem.newton.linear.stats
     kind, value = result_value(scene, result.steps, area) if result.steps else ("", None)
     return dict(element=scene.analysis.element.value, solver=problem.newton.linear.description,
@@ -156,6 +156,8 @@ def main():
     parser.add_argument("--quick", action="store_true", help="the small cases only (< 3 min)")
     parser.add_argument("--only", nargs="+", metavar="TEXT",
                         help="only the cases whose name contains one of these")
+    parser.add_argument("--update", action="store_true",
+                        help="keep the other cases of the results file in --out, replace these")
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "benchmark")
     parser.add_argument("--case", nargs="+", metavar=("SCENE", "OVERRIDE"),
                         help="run one case in this process and print its JSON")
@@ -171,6 +173,10 @@ def main():
         r = results[-1]
         print(f"{name}: {r['dofs']} dofs, {r['iterations']} ({r['failed']}) Newton, "
               f"{r['solve_s']:.2f} s solve, {r['value']}", file=sys.stderr, flush=True)
+    if args.update:
+        fresh = {r["case"]: r for r in results}
+        kept = json.loads((args.out / "results.json").read_text())
+        results = [fresh.pop(r["case"], r) for r in kept] + list(fresh.values())
     text = markdown(results, " ".join(["OMP_NUM_THREADS=1 python", *sys.argv]))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "results.json").write_text(json.dumps(results, indent=1))
