@@ -6,7 +6,7 @@ STAMP   := $(VENV)/.soilbin-installed
 SCENE   ?= scenes/tine-2in-90deg.toml
 export OMP_NUM_THREADS := 1
 
-.PHONY: run test bench setup system clean
+.PHONY: run test bench bench-quick setup system clean
 
 run: setup
 	$(VENV)/bin/soilbin run $(SCENE)
@@ -14,8 +14,12 @@ run: setup
 test: setup
 	$(PY) -m pytest -q tests
 
+# run time against error; results in runs/benchmark/ (README: python scripts/benchmark.py --readme README.md)
 bench: setup
-	$(PY) scripts/benchmark.py --readme README.md
+	$(PY) scripts/benchmark.py
+
+bench-quick: setup
+	$(PY) scripts/benchmark.py --quick
 
 setup: system $(STAMP)
 

@@ -1,140 +1,193 @@
-"""Run time against error for the scenes with a closed-form answer.
+"""Run time against error: the strip footing against (2 + pi) c, the tine's draft, a large tine.
 
-Each case is one serial `soilbin run --json` subprocess; the error is taken
-against the closed form evaluated from the resolved scene (run folder's scene.toml):
+Each case runs in its own process (``--case``), serially, and reports its CPU
+time (``time.process_time``: set-up = mesh, spaces, form compilation; solve
+= the load steps), its peak memory, load steps, Newton iterations of
+converged steps and of attempts that were cut, the linear solver, and the
+CPU time per Newton iteration of its parts. Errors are against closed forms
+evaluated from the scene: the rigid footing's limit pressure and the strip
+load's collapse pressure against (2 + pi) c, the block's collapse stress
+against 2c cos(phi) / (1 - sin(phi)), the column's settlement against pL/M;
+the tine reports its draft at the final travel (no closed form).
 
-* strip footing and strip load (von Mises, plane strain): (2 + pi) c
-* elastic column: top settlement p L / M, M = E (1 - nu) / ((1 + nu) (1 - 2 nu));
-  in large deformation the pressure M ln(L / (L - w)) at the final settlement w
-* Drucker-Prager block: uniaxial strength 2 c cos(phi) / (1 - sin(phi))
-Small- and large-deformation runs of the same scene give the cost of the
-updated Lagrangian option.
-
-`--readme PATH` replaces the text between the benchmark markers in PATH.
+The results go to ``runs/benchmark/results.json`` and ``results.md``;
+``--readme PATH`` also replaces the text between the benchmark markers in PATH.
 """
 import argparse
 import json
 import math
 import os
-import re
+import resource
 import subprocess
 import sys
-import tempfile
 import time
-import tomllib
 from datetime import date
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-SOILBIN = Path(sys.executable).with_name("soilbin")
-FOOTING = "scenes/strip-footing-von-mises.toml"
-COLUMN = "scenes/column-elastic.toml"
-COLUMN_LARGE = "scenes/column-elastic-large.toml"
-BLOCK = "scenes/block-drucker-prager.toml"
-STRIP_LOAD = "scenes/strip-load-von-mises.toml"
-MARKERS = re.compile(r"(<!-- benchmark:start -->\n).*?(<!-- benchmark:end -->)", re.S)
-
-
-def footing_error(summary, scene):
-    exact = (2 + math.pi) * scene["materials"]["clay"]["c"]
-    return summary["limit_pressure"] / exact - 1
-
-
-def strip_load_error(summary, scene):
-    return summary["collapse_pressure"] / ((2 + math.pi) * scene["materials"]["clay"]["c"]) - 1
-
-
-def block_error(summary, scene):
-    soil = scene["materials"]["soil"]
-    phi = math.radians(soil["phi"])
-    return summary["collapse_stress"] / (2 * soil["c"] * math.cos(phi) / (1 - math.sin(phi))) - 1
-
-
-def column_large_error(summary, scene):
-    soil = scene["materials"]["soil"]
-    E, nu, L = soil["E"], soil["nu"], scene["mesh"]["lz"]
-    M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
-    return summary["pressure"] / (M * math.log(L / (L - summary["top_settlement"]))) - 1
-
-
-def column_error(summary, scene):
-    soil = scene["materials"]["soil"]
-    E, nu = soil["E"], soil["nu"]
-    M = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
-    exact = scene["loading"]["magnitude"] * scene["mesh"]["lz"] / M
-    return summary["top_settlement"] / exact - 1
+MARKERS = ("<!-- benchmark:start -->\n", "<!-- benchmark:end -->")
+FOOTING, COLUMN, TINE = "strip-footing-von-mises", "column-elastic", "tine-2in-90deg"
+STRIP_LOAD, BLOCK = "strip-load-von-mises", "block-drucker-prager"
 
 
 def cases(quick):
-    refines = (1, 2) if quick else (1, 2, 3, 4)
-    for r in refines:
-        yield f"strip footing, refine={r}", FOOTING, [f"mesh.refine={r}"], footing_error
-    for r in (1,) if quick else (1, 2):  # hex27-bbar at refine=2 takes minutes
-        yield (f"strip footing, refine={r}", FOOTING,
-               [f"mesh.refine={r}", "analysis.element=hex27-bbar"], footing_error)
-    yield "strip footing, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"], footing_error
-    for nz in (6, 24) if quick else (6, 24, 96):
-        yield f"column, nz={nz}", COLUMN, [f"mesh.nz={nz}"], column_error
-    yield "column, large deformation to w/L = 0.3", COLUMN_LARGE, [], column_large_error
-    for large in ("false", "true"):
+    """(name, scene, overrides)."""
+    for r in (1, 2) if quick else (1, 2, 3, 4):
+        yield f"footing, refine={r}", FOOTING, [f"mesh.refine={r}"]
+    yield "footing, refine=2, LU", FOOTING, ["mesh.refine=2", "solver.linear=lu"]
+    yield "footing hex8, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"]
+    if not quick:   # hex27-bbar takes minutes
+        for r in (1, 2):
+            yield (f"footing hex27-bbar, refine={r}", FOOTING,
+                   [f"mesh.refine={r}", "analysis.element=hex27-bbar"])
+    yield "column, nz=24", COLUMN, ["mesh.nz=24"]
+    yield "tine, refine=1", TINE, []
+    if quick:
+        yield ("tine, refine=1, AMG, 2 steps to 0.025 in", TINE,
+               ["solver.linear=amg", "loading.steps=2", "loading.magnitude=0.025"])
+        return
+    yield "tine, refine=1, AMG", TINE, ["solver.linear=amg"]
+    for large in ("false", "true"):   # what the updated Lagrangian option costs
         kind = "large" if large == "true" else "small"
-        yield f"block, {kind} deformation", BLOCK, [f"analysis.large_deformation={large}"], block_error
+        yield f"block, {kind} deformation", BLOCK, [f"analysis.large_deformation={large}"]
         yield (f"strip load to collapse, {kind} deformation", STRIP_LOAD,
-               [f"analysis.large_deformation={large}"], strip_load_error)
+               [f"analysis.large_deformation={large}"])
+    yield "tine, refine=2", TINE, ["mesh.refine=2"]
+    yield "tine, refine=3, AMG", TINE, ["mesh.refine=3", "solver.linear=amg"]
+    # the large mesh (1.0e6 displacement dofs): one step of 1/8 of the travel
+    yield ("tine, refine=5, AMG, one step", TINE,
+           ["mesh.refine=5", "solver.linear=amg", "loading.steps=1", "loading.magnitude=0.0125"])
 
 
-def run_case(name, scene_file, sets, error):
-    with tempfile.TemporaryDirectory() as out:
-        cmd = [SOILBIN, "run", scene_file, "--out", out, "--json"]
-        for s in sets:
-            cmd += ["--set", s]
-        start = time.perf_counter()
-        proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
-                              env={**os.environ, "OMP_NUM_THREADS": "1"})
-        total = time.perf_counter() - start
-        if proc.returncode not in (0, 1):  # 1: stopped short of the full load, summary still printed
-            sys.exit(f"{name} {sets} failed:\n{proc.stderr}")
-        summary = json.loads(proc.stdout.strip().splitlines()[-1])
-        scene = tomllib.loads((Path(out) / "scene.toml").read_text())
-    err = f"{100 * error(summary, scene):+.3g}" if summary["converged"] else summary["status"]
-    if summary.get("status") == "collapse":   # force control: the last converged step
-        err += " (collapse)"
-    return [name, scene["analysis"]["element"], summary["n_cells"], summary["n_dofs"],
-            summary["n_steps"], summary["newton_iterations"], f"{summary['wall_s']:.2f}",
-            f"{total:.2f}", err]
+def result_value(scene, records, area):
+    """(error in %, or the draft) of a case from its converged steps."""
+    peak = max(r.force for r in records) / area
+    if scene.name.startswith(("strip-footing", "strip-load")):
+        c = scene.materials[scene.regions["soil"]].c
+        return "error %", 100 * (peak / ((2 + math.pi) * c) - 1)
+    if scene.name.startswith("block"):
+        soil = scene.materials[scene.regions["soil"]]
+        phi = math.radians(soil.phi)
+        return "error %", 100 * (peak / (2 * soil.c * math.cos(phi) / (1 - math.sin(phi))) - 1)
+    if scene.name.startswith("column"):
+        soil = scene.materials[scene.regions["soil"]]
+        M = soil.E * (1 - soil.nu) / ((1 + soil.nu) * (1 - 2 * soil.nu))
+        exact = scene.loading.magnitude * scene.mesh.lz / M
+        return "error %", 100 * (records[-1].displacement / exact - 1)
+    return "draft lb", records[-1].force
 
 
-def table(rows):
-    head = ["case", "element", "cells", "dofs", "load steps", "Newton iterations",
-            "wall (s)", "total (s)", "error (%)"]
-    lines = [head, ["---"] * len(head), *rows]
-    return "\n".join("| " + " | ".join(map(str, line)) + " |" for line in lines)
+def run_case(scene_name, overrides):
+    """Solve one case in this process; returns its measurements."""
+    start = time.process_time()
+    from mpi4py import MPI
+    from soilbin.meshes import BUILDERS
+    from soilbin.problem import SoilProblem
+    from soilbin.scene import load_scene
+    from soilbin.solver.stepping import run_load_steps
+
+    scene = load_scene(ROOT / "scenes" / f"{scene_name}.toml", overrides)
+    problem = SoilProblem(scene, BUILDERS[scene.mesh_builder].build(scene.mesh, MPI.COMM_WORLD))
+    setup = time.process_time() - start
+    result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None)
+    solve = time.process_time() - start - setup
+    area = problem.area   # of the current configuration, as the run's summary
+    newton, linear = problem.newton.stats, problem.newton.linear.stats
+    kind, value = result_value(scene, result.steps, area) if result.steps else ("", None)
+    return dict(element=scene.analysis.element.value, solver=problem.newton.linear.description,
+                dofs=problem.n_dofs, complete=result.complete, steps=len(result.steps),
+                until_collapse=scene.loading.until_collapse,
+                iterations=newton["iterations"], failed=newton["failed_iterations"],
+                residuals=newton["residual_evaluations"], setup_s=setup, solve_s=solve,
+                memory_MB=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                kind=kind, value=value, krylov=linear["krylov_iterations"],
+                factorisation_s=linear["factorisation_s"], linear_solve_s=linear["solve_s"],
+                assembly_s=newton["assembly_s"], constitutive_s=newton["constitutive_s"])
+
+
+def measure(name, scene, overrides):
+    cmd = [sys.executable, __file__, "--case", scene, *overrides]
+    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
+                          env={**os.environ, "OMP_NUM_THREADS": "1"})
+    if proc.returncode != 0:
+        sys.exit(f"{name} failed:\n{proc.stderr[-3000:]}")
+    return {"case": name, "overrides": overrides, **json.loads(proc.stdout.strip().splitlines()[-1])}
+
+
+def markdown(results, command):
+    def row(cells):
+        return "| " + " | ".join(map(str, cells)) + " |"
+    head = ["case", "element", "linear solver", "dofs", "load steps", "Newton (failed)",
+            "CPU solve (s)", "CPU total (s)", "memory (MB)", "error (%) or draft (lb)"]
+    lines = [row(head), row(["---"] * len(head))]
+    for r in results:
+        value = "failed" if r["value"] is None else (
+            f"{r['value']:+.3g}" if r["kind"] == "error %" else f"{r['value']:.1f} lb")
+        newton = f"{r['iterations']} ({r['failed']})"
+        if not r["complete"]:
+            value += " (collapse)" if r["until_collapse"] else " (incomplete)"
+        lines.append(row([r["case"], r["element"], r["solver"], r["dofs"], r["steps"], newton,
+                          f"{r['solve_s']:.2f}", f"{r['setup_s'] + r['solve_s']:.2f}",
+                          f"{r['memory_MB']:.0f}", value]))
+    cost = ["case", "dofs", "factorisation / set-up", "assembly", "constitutive update",
+            "solves", "Krylov its / solve"]
+    lines += ["", "CPU milliseconds per Newton iteration (converged and failed):", "",
+              row(cost), row(["---"] * len(cost))]
+    for r in results:
+        n = max(r["iterations"] + r["failed"], 1)
+        per = [f"{1000 * r[k] / n:.1f}" for k in ("factorisation_s", "assembly_s", "constitutive_s",
+                                                   "linear_solve_s")]
+        krylov = f"{r['krylov'] / n:.0f}" if r["krylov"] else "-"
+        lines.append(row([r["case"], r["dofs"], *per, krylov]))
+    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo")
+                if line.startswith("model name")), "unknown CPU")
+    lines += ["", "Newton (failed): iterations of converged steps (of attempts that were cut). "
+              "CPU = `time.process_time` of the case's own process (total = set-up incl. mesh and "
+              "form compilation + solve); memory = peak resident set. Serial runs on a machine "
+              "shared with other jobs (CPU time, not wall time, is comparable).",
+              f"Machine: nproc {len(os.sched_getaffinity(0))}, {cpu}, {date.today()}; "
+              f"command: `{command}`"]
+    return "\n".join(lines) + "\n"
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--readme", type=Path, help="write the table into this file")
-    parser.add_argument("--quick", action="store_true", help="refine 1-2 (hex27-bbar: 1) and nz 6, 24 only")
+    parser.add_argument("--readme", type=Path, help="write the tables into this file")
+    parser.add_argument("--quick", action="store_true", help="the small cases only (< 3 min)")
+    parser.add_argument("--only", nargs="+", metavar="TEXT",
+                        help="only the cases whose name contains one of these")
+    parser.add_argument("--update", action="store_true",
+                        help="keep the other cases of the results file in --out, replace these")
+    parser.add_argument("--out", type=Path, default=ROOT / "runs" / "benchmark")
+    parser.add_argument("--case", nargs="+", metavar=("SCENE", "OVERRIDE"),
+                        help="run one case in this process and print its JSON")
     args = parser.parse_args()
-
-    rows = []
-    for case in cases(args.quick):
-        rows.append(run_case(*case))
-        print(" | ".join(map(str, rows[-1])), file=sys.stderr, flush=True)
-    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo")
-                if line.startswith("model name")), "unknown CPU")
-    command = " ".join(["OMP_NUM_THREADS=1 python", *sys.argv])
-    text = (f"{table(rows)}\n\nwall = the run's own `wall_s` (meshing, setup and solve, without "
-            f"Python start-up; includes form compilation if the FFCx cache is cold); total = "
-            f"elapsed time of the whole `soilbin run` process.\n"
-            f"Machine: nproc {len(os.sched_getaffinity(0))}, {cpu}, {date.today()}; "
-            f"command: `{command}`\n")
+    if args.case:
+        print(json.dumps(run_case(args.case[0], args.case[1:])))
+        return
+    results = []
+    for name, scene, overrides in cases(args.quick):
+        if args.only and not any(text in name for text in args.only):
+            continue
+        results.append(measure(name, scene, overrides))
+        r = results[-1]
+        print(f"{name}: {r['dofs']} dofs, {r['iterations']} ({r['failed']}) Newton, "
+              f"{r['solve_s']:.2f} s solve, {r['value']}", file=sys.stderr, flush=True)
+    if args.update:
+        fresh = {r["case"]: r for r in results}
+        kept = json.loads((args.out / "results.json").read_text())
+        results = [fresh.pop(r["case"], r) for r in kept] + list(fresh.values())
+    text = markdown(results, " ".join(["OMP_NUM_THREADS=1 python", *sys.argv]))
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "results.json").write_text(json.dumps(results, indent=1))
+    (args.out / "results.md").write_text(text)
     print(text)
     if args.readme:
         readme = args.readme.read_text()
-        if not MARKERS.search(readme):
+        start, end = readme.find(MARKERS[0]), readme.find(MARKERS[1])
+        if start < 0 or end < start:
             sys.exit(f"{args.readme}: no benchmark markers")
-        args.readme.write_text(MARKERS.sub(lambda m: m[1] + text + m[2], readme))
+        args.readme.write_text(readme[:start + len(MARKERS[0])] + text + readme[end:])
 
 
 if __name__ == "__main__":

@@ -47,6 +47,13 @@ class LineSearch(enum.Enum):
     BACKTRACKING = "bt"
 
 
+class LinearSolverKind(enum.Enum):
+    AUTO = "auto"          # LDLT if the tangent is symmetric, else LU; AMG on large systems
+    LU = "lu"              # MUMPS LU
+    CHOLESKY = "cholesky"  # MUMPS LDLT of the condensed system
+    AMG = "amg"            # CG or GMRES with GAMG on the condensed system
+
+
 class Field(enum.Enum):
     DISPLACEMENT = "displacement"
     STRESS = "stress"
@@ -162,7 +169,10 @@ class Solver(Params):
     atol: float = param(1e-10, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
                         doc="residual floor relative to the run's force scale")
     max_iterations: int = param(25, lo=1, hi=200, doc="Newton iterations before the step is cut")
-    line_search: LineSearch = param(LineSearch.BASIC, doc="basic (full steps) or bt (backtracking)")
+    line_search: LineSearch = param(LineSearch.BACKTRACKING,
+                                    doc="basic (full steps) or bt (backtracking, halving)")
+    linear: LinearSolverKind = param(LinearSolverKind.AUTO,
+                                     doc="linear solver: auto, lu, cholesky (LDLT) or amg")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -48,6 +48,7 @@ class SoilProblem:
                                    self.w, v))
         self.bcs = self.supports.bcs
         self.newton = self._newton(v)
+        self._factor, self._factors, self._travels = 0.0, (0.0, 0.0), (0.0, 0.0)
 
     def _material_points(self):
         scene, tagged = self.scene, self.tagged
@@ -71,10 +72,14 @@ class SoilProblem:
         jacobian = self.kinematics.jacobian(residual, self.points,
                                             ufl.TrialFunction(self.disc.space), v)
         tool = self.tool
+        # symmetric Jacobian: small strain, no interface, and a symmetric material tangent
+        symmetric = not self.kinematics.incremental and not (tool and tool.interface)
         newton = NewtonSolver(self.comm, residual, jacobian, self.w, self.bcs,
-                              self.update_material_state, self.scene.solver,
+                              self.update_material_state, self.scene.solver, self.disc,
                               nodal_terms=tool.nodal_terms if tool else [],
-                              border=tool if tool and tool.force_controlled else None)
+                              border=tool if tool and tool.force_controlled else None,
+                              symmetric=symmetric,
+                              symmetric_tangent=self.points.tangent_symmetric)
         if dead is not None:   # loads present from the start set the force scale
             newton.include_force_scale(vector_norm(dead))
         return newton
@@ -105,13 +110,25 @@ class SoilProblem:
 
     # -- the load stepper's protocol -------------------------------------------------
     def set_load_factor(self, factor):
+        """The load at ``factor`` and, after two converged states, the first iterate
+        extrapolated linearly from them (the tool's travel under force control too)."""
         self.drive.set_factor(factor)
+        self._factor = factor
+        last, before = self._factors
+        if last > before:
+            ratio = (factor - last) / (last - before)
+            self.kinematics.predict(ratio)
+            if self.tool is not None and self.tool.force_controlled:
+                self.tool.set_value(self._travels[0] + ratio * (self._travels[0] - self._travels[1]))
 
     def solve(self):
         """Equilibrium at the current load factor, starting from the last committed state."""
         return self.newton.solve()
 
     def commit(self):
+        self._factors = (self._factor, self._factors[0])
+        if self.tool is not None:
+            self._travels = (self.tool.travel, self._travels[0])
         self.drive.commit()
         if self.tool is not None and self.tool is not self.drive:
             self.tool.commit()
@@ -123,7 +140,8 @@ class SoilProblem:
             self.tool.roll_back()
 
     def observe(self):
-        """(displacement, force) of the driven boundary or tool along the loading direction."""
+        """Displacement and force of the driven boundary or tool along the loading direction,
+        and its further values (:attr:`curve_columns`)."""
         return self.drive.observe()
 
     # -- outputs ----------------------------------------------------------------------

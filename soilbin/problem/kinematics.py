@@ -24,6 +24,13 @@ class SmallStrain:
     def __init__(self, disc, w, w_committed):
         self._disc, self._w, self._w_committed = disc, w, w_committed
         self._p1 = None
+        self._last_increment = None
+
+    def predict(self, ratio):
+        """First iterate of a step: w = w_n + ratio (w_n − w_{n−1}), the last converged
+        increment scaled to this step (linear extrapolation of the solution path)."""
+        if self._last_increment is not None:
+            self._w.x.array[:] = self._w_committed.x.array + ratio * self._last_increment
 
     def strain_increment(self):
         return (ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w))
@@ -41,6 +48,7 @@ class SmallStrain:
 
     def commit(self, points):
         points.commit()
+        self._last_increment = self._w.x.array - self._w_committed.x.array
         self._w_committed.x.array[:] = self._w.x.array
 
     def total_displacement(self):
@@ -74,6 +82,9 @@ class UpdatedLagrangian:
 
     def strain_increment(self):
         return ufl_mandel(updated_lagrangian.model_strain(self._disc, self._w))
+
+    def predict(self, ratio):
+        """No predictor: each step starts from the converged configuration (w = 0)."""
 
     def internal_force(self, points, v):
         return updated_lagrangian.internal_force(self._disc, points, self._w, v)

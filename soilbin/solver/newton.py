@@ -1,4 +1,4 @@
-"""Newton's method for one load step, with a MUMPS LU solve per iterate.
+"""Newton's method for one load step, with one factorisation (or AMG set-up) per iterate.
 
 The residual evaluation runs the constitutive update once per iterate; the
 Jacobian, assembled at the same iterate, reuses its tangent. Convergence is
@@ -13,9 +13,18 @@ to the system (the travel of a force-controlled tool and its force
 balance). The bordered Newton system [K b; cᵀ d] [Δw; Δa] = −[R; g] is
 solved by block elimination with the one factorisation of K:
 K x = −R, K z = b, Δa = (−g − c·x) / (d − c·z), Δw = x − z Δa.
+
+A step that is not going to converge is cut early: as soon as the residual
+exceeds ``DIVERGENCE`` times the step's first, has grown in two successive
+iterations, or has not reached a new minimum for ``STAGNATION`` iterations
+(on the footing, every step that later diverged had grown twice in a row
+first, and no converged step had). ``stats`` accumulates the CPU time of
+each part of an iterate (constitutive update, assembly, factorisation,
+solves) and the iterations of converged and failed solves.
 """
 import dataclasses
 import math
+import time
 
 import numpy as np
 from petsc4py import PETSc
@@ -24,10 +33,16 @@ import dolfinx.fem.petsc  # noqa: F401  (registers fem.petsc)
 
 from ..errors import ConvergenceError, ReturnMapError
 from ..scene import LineSearch
+from .linear_solver import LinearSolver, LinearSolveError
 
 
 class NewtonFailure(ConvergenceError):
-    """A Newton solve that did not converge (the reason is in the message)."""
+    """A Newton solve that did not converge (the reason is in the message) after
+    ``iterations`` Newton corrections."""
+
+    def __init__(self, message, iterations=0):
+        super().__init__(message)
+        self.iterations = iterations
 
 
 @dataclasses.dataclass(frozen=True)
@@ -38,16 +53,39 @@ class NewtonResult:
 
 #: Halvings of the step a backtracking line search tries before taking the shortest.
 MAX_BACKTRACKS = 6
+#: A residual this many times the step's first ends the step (it is cut).
+DIVERGENCE = 10.0
+#: Iterations without a new smallest residual that end the step.
+STAGNATION = 5
+
+
+class _Clock:
+    """Adds the CPU time of a ``with`` block to ``stats[key]``."""
+
+    def __init__(self, stats):
+        self._stats = stats
+
+    def __call__(self, key):
+        self._key = key
+        return self
+
+    def __enter__(self):
+        self._start = time.process_time()
+
+    def __exit__(self, *exc):
+        self._stats[self._key] += time.process_time() - self._start
 
 
 class NewtonSolver:
-    def __init__(self, comm, residual, jacobian, w, bcs, before_residual, options, prefix="soil_",
-                 nodal_terms=(), border=None):
+    def __init__(self, comm, residual, jacobian, w, bcs, before_residual, options, disc,
+                 prefix="soil_", nodal_terms=(), border=None, symmetric=False,
+                 symmetric_tangent=lambda: True):
         """``before_residual()`` runs after ``w`` is set to an iterate, before assembly;
         ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``);
         ``border``, if given, carries the extra scalar unknown (see the module docstring):
         ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d, ``move(da)``,
-        ``value``/``set_value(a)``."""
+        ``value``/``set_value(a)``; ``symmetric``: whether the Jacobian can be symmetric
+        (then ``symmetric_tangent()`` says whether it is at the current iterate)."""
         self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
         self._nodal_terms = tuple(nodal_terms)
@@ -58,18 +96,13 @@ class NewtonSolver:
         self._dx = w.vector.duplicate()
         self._gap = w.vector.duplicate()
         self._force_scale = 0.0
-
-        self._ksp = ksp = PETSc.KSP().create(comm)
-        ksp.setOptionsPrefix(prefix)
-        petsc = PETSc.Options(prefix)
-        for key, value in {"ksp_type": "preonly", "pc_type": "lu",
-                           "pc_factor_mat_solver_type": "mumps",
-                           # null pivots (e.g. soil yielded at the apex, zero tangent) are
-                           # detected and their solution components set to zero, not an abort
-                           "mat_mumps_icntl_24": 1}.items():
-            petsc[key] = value
-        ksp.setOperators(self.matrix)
-        ksp.setFromOptions()
+        self._symmetric_tangent = symmetric_tangent
+        n_dofs = w.vector.getSize()
+        self.linear = LinearSolver(comm, options.linear, disc, n_dofs,
+                                   symmetric and border is None, prefix)
+        self.stats = dict(constitutive_s=0.0, assembly_s=0.0, iterations=0, failed_iterations=0,
+                          residual_evaluations=0)
+        self._clock = _Clock(self.stats)
         if border is not None:
             self._border_b, self._border_c = w.vector.duplicate(), w.vector.duplicate()
             self._border_z = w.vector.duplicate()
@@ -84,8 +117,11 @@ class NewtonSolver:
         x = self._w.vector
         with b.localForm() as b_local:
             b_local.set(0.0)
-        self._before()
-        fem.petsc.assemble_vector(b, self._L)
+        self.stats["residual_evaluations"] += 1
+        with self._clock("constitutive_s"):
+            self._before()
+        with self._clock("assembly_s"):
+            fem.petsc.assemble_vector(b, self._L)
         if self._bc_mismatch(x):   # first iterate of a displacement step: lift g - x
             fem.petsc.apply_lifting(b, [self._a], bcs=[self._bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
@@ -122,26 +158,19 @@ class NewtonSolver:
 
     def _newton_step(self):
         """Solve for the Newton correction into ``self._dx`` (and the border's Δa)."""
-        self.jacobian(self.matrix)
-        self._ksp.setOperators(self.matrix)
+        with self._clock("assembly_s"):
+            self.jacobian(self.matrix)
+        self.linear.set_operator(self.matrix, self._symmetric_tangent)
         self._b.scale(-1.0)
-        self._linear_solve(self._b, self._dx)
+        self.linear.solve(self._b, self._dx)
         if self._border is None:
             return 0.0
         b, c, z = self._border_b, self._border_c, self._border_z
         d = self._border.linearise(b, c)
-        self._linear_solve(b, z)
+        self.linear.solve(b, z)
         da = (-self._border.residual() - c.dot(self._dx)) / (d - c.dot(z))
         self._dx.axpy(-da, z)
         return da
-
-    def _linear_solve(self, rhs, x):
-        try:
-            self._ksp.solve(rhs, x)
-        except PETSc.Error as err:   # e.g. MUMPS failing on a singular tangent
-            raise NewtonFailure(f"the linear solve failed (PETSc error {err.ierr})") from None
-        if self._ksp.getConvergedReason() < 0:
-            raise NewtonFailure("the linear solve failed (factorisation)")
 
     def _set_iterate(self, x, a, dx, da, step):
         """w = x + step dx (and a + step da)."""
@@ -152,27 +181,44 @@ class NewtonSolver:
 
     def solve(self):
         """Newton from the current ``w``; on success ``w`` holds the solution."""
-        residuals = []
+        residuals, corrections = [], 0
         x = self._w.vector.duplicate()
         try:
             residuals.append(self.residual(self._b))
             while True:
-                if not np.isfinite(residuals[-1]):
-                    raise NewtonFailure(f"Newton did not converge (residual is not a number) "
-                                        f"after {len(residuals) - 1} iterations")
                 if self._converged(residuals):
+                    self.stats["iterations"] += len(residuals) - 1
                     return NewtonResult(len(residuals) - 1, tuple(residuals))
-                if len(residuals) > self._opts.max_iterations:
-                    raise NewtonFailure(f"Newton did not converge (iteration limit reached) "
-                                        f"after {len(residuals) - 1} iterations")
+                self._check_progress(residuals)
+                corrections += 1
                 da = self._newton_step()
                 self._w.vector.copy(x)
                 a = self._border.value if self._border is not None else 0.0
                 residuals.append(self._line_search(x, a, da, residuals[-1]))
-        except ReturnMapError as err:
-            raise NewtonFailure(str(err)) from None
+        except (ReturnMapError, LinearSolveError, NewtonFailure) as err:
+            self.stats["failed_iterations"] += corrections
+            raise NewtonFailure(str(err), corrections) from None
         finally:
             x.destroy()
+
+    def _check_progress(self, residuals):
+        """Raise NewtonFailure if the step is not going to converge."""
+        n = len(residuals) - 1
+        if not np.isfinite(residuals[-1]):
+            raise NewtonFailure(f"Newton did not converge (residual is not a number) "
+                                f"after {n} iterations")
+        if residuals[-1] > DIVERGENCE * residuals[0]:
+            raise NewtonFailure(f"Newton diverged (residual {residuals[-1]:.3g}, "
+                                f"{DIVERGENCE:g} times the first) after {n} iterations")
+        if n >= 2 and residuals[-1] > residuals[-2] > residuals[-3]:
+            raise NewtonFailure(f"Newton diverged (the residual grew in two successive "
+                                f"iterations) after {n} iterations")
+        if n > STAGNATION and min(residuals[-STAGNATION:]) >= min(residuals[:-STAGNATION]):
+            raise NewtonFailure(f"Newton stagnated ({STAGNATION} iterations without a "
+                                f"smaller residual) after {n} iterations")
+        if n >= self._opts.max_iterations:
+            raise NewtonFailure(f"Newton did not converge (iteration limit reached) "
+                                f"after {n} iterations")
 
     def _line_search(self, x, a, da, norm0):
         """Take the full step, or with backtracking halve it until the residual decreases."""

@@ -119,6 +119,11 @@ class MaterialPoints:
             # Linear models have a constant tangent: write it once.
             self._tangent_frozen = all(m.linear for m in self.models.values())
 
+    def tangent_symmetric(self):
+        """Whether the tangent at every point is symmetric (to round-off)."""
+        t = self._tangent
+        return np.allclose(t, t.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * np.abs(t).max())
+
     def _at_committed_state(self):
         return (self._converged_tangent is not None
                 and np.array_equal(self._w.x.array, self._w_committed.x.array))

@@ -1,18 +1,25 @@
 """Incremental loading with step cutting.
 
-The load factor goes from 0 to 1 in the scene's equal steps, landing exactly
-on any stated load factors (``stops``) on the way. A step whose
-Newton solve fails is rolled back and halved; the increment never goes below
-the nominal one over 2**max_cuts, which ends the run (under force control,
-at the collapse load to that resolution). After a step that converged
-without a cut the increment doubles back toward the nominal one. Every converged step is handed to ``on_step`` at once, so a run
-that stops early leaves all its converged steps behind.
+The load factor goes from 0 to 1 in steps of at most the scene's nominal
+increment 1/steps, landing exactly on any stated load factors (``stops``) on
+the way. A step whose Newton solve fails is rolled back and
+halved; the increment never goes below the nominal one over 2**max_cuts,
+which ends the run (under force control, at the collapse load to that
+resolution). The next increment follows the last step's Newton iterations:
+it doubles (back toward the nominal one) after an easy step (at most
+``EASY`` iterations), halves after a hard one (at least ``HARD``, before the
+next one fails), and stays otherwise. Every converged step is handed to
+``on_step`` at once, so a run that stops early leaves all its converged
+steps behind.
 """
 import dataclasses
 import time
 from typing import Protocol, Sequence
 
 from ..errors import ConvergenceError
+
+#: Newton iterations of an easy step (the increment doubles) and of a hard one (it halves).
+EASY, HARD = 6, 10
 
 
 class SolveResult(Protocol):
@@ -54,6 +61,7 @@ class StepRecord:
     force: float
     newton_iterations: int
     cuts: int
+    failed_iterations: int  # spent on the attempts of this step that were cut
     wall_s: float
     residuals: tuple
     columns: dict = dataclasses.field(default_factory=dict)
@@ -70,7 +78,7 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
                    stops=()):
     """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors)."""
     nominal = 1.0 / steps
-    level, factor, cuts = 0, 0.0, 0      # increment = nominal / 2**level
+    level, factor, cuts, failed = 0, 0.0, 0, 0      # increment = nominal / 2**level
     records, start = [], clock()
     while factor < 1.0 - 1e-12:
         increment = min(nominal / 2**level, 1.0 - factor)
@@ -82,6 +90,7 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
             result = problem.solve()
         except ConvergenceError as err:
             problem.roll_back()
+            failed += getattr(err, "iterations", 0)
             if level == max_cuts:
                 return StepperResult(tuple(records), False,
                                      f"step to load factor {factor + increment:.6g} failed with the "
@@ -93,10 +102,13 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
         problem.commit()
         seen = problem.observe()
         record = StepRecord(len(records) + 1, factor, seen.displacement, seen.force,
-                            result.iterations, cuts, clock() - start, result.residuals, seen.columns)
+                            result.iterations, cuts, failed, clock() - start, result.residuals,
+                            seen.columns)
         records.append(record)
         on_step(record)
-        if cuts == 0:
+        if result.iterations <= EASY:
             level = max(level - 1, 0)
-        cuts = 0
+        elif result.iterations >= HARD:
+            level = min(level + 1, max_cuts)
+        cuts = failed = 0
     return StepperResult(tuple(records), True, "")

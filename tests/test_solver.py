@@ -1,0 +1,84 @@
+"""Newton's linear solvers, the condensed B-bar system, the early cut of diverging steps."""
+import numpy as np
+import pytest
+from petsc4py import PETSc
+
+from conftest import make_problem
+from soilbin.errors import ConvergenceError
+from soilbin.solver.condensation import CellCondensation
+from soilbin.solver.newton import NewtonFailure
+from soilbin.solver.stepping import run_load_steps
+
+# the footing before collapse, plastic under the edge: 4 steps to 0.02 in
+SHORT = ("loading.magnitude=0.02", "loading.steps=4")
+
+
+def curve(*overrides):
+    problem = make_problem("strip-footing-von-mises", *SHORT, *overrides)
+    result = run_load_steps(problem, 4, 3, lambda r: None)
+    assert result.complete
+    return problem, np.array([(r.load_factor, r.force) for r in result.steps])
+
+
+def test_every_linear_solver_gives_the_same_curve():
+    lu, reference = curve("solver.linear=lu")
+    assert lu.newton.linear.description == "MUMPS LU"
+    for kind, name in (("cholesky", "MUMPS LDLT"), ("amg", "GMRES + GAMG"), ("auto", "MUMPS LDLT")):
+        problem, other = curve(f"solver.linear={kind}")
+        assert problem.newton.linear.description.startswith(name)
+        assert other[:, 0] == pytest.approx(reference[:, 0], rel=1e-12)
+        assert other[:, 1] == pytest.approx(reference[:, 1], rel=1e-6)
+    assert problem.newton.linear.stats["unsymmetric_solves"] == 0   # von Mises: symmetric
+
+
+def test_auto_takes_lu_for_the_unsymmetric_interface():
+    problem = make_problem("tine-2in-90deg")
+    assert problem.newton.linear.description == "MUMPS LU"
+
+
+def test_condensed_system_reproduces_the_mixed_solution():
+    """Eliminating θ and p cell by cell and solving for u gives the mixed system's solution."""
+    problem = make_problem("strip-footing-von-mises", "loading.magnitude=0.004", "loading.steps=1")
+    newton = problem.newton
+    problem.set_load_factor(1.0)
+    newton.solve()                   # a plastic state
+    A = newton.matrix
+    newton.residual(newton._b)
+    newton.jacobian(A)
+    rhs = A.createVecLeft()
+    rhs.setRandom()
+    exact, condensed = A.createVecRight(), A.createVecRight()
+    lu = PETSc.KSP().create(problem.comm)
+    lu.setType("preonly")
+    lu.getPC().setType("lu")
+    lu.getPC().setFactorSolverType("mumps")
+    lu.setOperators(A)
+    lu.solve(rhs, exact)
+    condensation = CellCondensation(problem.disc)
+    S = condensation.condense(A)
+    assert S.getSize()[0] == A.getSize()[0] - 2 * problem.mesh.topology.index_map(3).size_global
+    lu_s = PETSc.KSP().create(problem.comm)
+    lu_s.setType("preonly")
+    lu_s.getPC().setType("lu")
+    lu_s.getPC().setFactorSolverType("mumps")
+    lu_s.setOperators(S)
+    condensation.solve(lu_s, rhs, condensed)
+    condensed.axpy(-1.0, exact)
+    assert condensed.norm() < 1e-9 * exact.norm()
+
+
+def test_a_diverging_step_is_cut_early():
+    """The whole settlement in one full-Newton step diverges; it is cut long before the
+    iteration limit (25), and the stepper records the iterations it cost."""
+    problem = make_problem("strip-footing-von-mises", "loading.steps=1",
+                           "solver.line_search=basic")
+    problem.set_load_factor(1.0)
+    with pytest.raises(NewtonFailure) as failure:
+        problem.solve()
+    assert isinstance(failure.value, ConvergenceError)
+    assert 1 <= failure.value.iterations <= 6
+    assert "diverged" in str(failure.value) or "stagnated" in str(failure.value)
+    assert problem.newton.stats["failed_iterations"] == failure.value.iterations
+    problem.roll_back()
+    result = run_load_steps(problem, 1, 5, lambda r: None)   # cut until a step converges
+    assert result.steps[0].cuts >= 1 and result.steps[0].failed_iterations >= failure.value.iterations
