@@ -170,7 +170,7 @@ class Solver(Params):
                         doc="residual floor relative to the run's force scale")
     max_iterations: int = param(25, lo=1, hi=200, doc="Newton iterations before the step is cut")
     line_search: LineSearch = param(LineSearch.BACKTRACKING,
-                                    doc="basic (full steps) or bt (backtracking, halving)")
+                                    doc="basic (full steps) or bt (Armijo backtracking)")
     linear: LinearSolverKind = param(LinearSolverKind.AUTO,
                                      doc="linear solver: auto, lu, cholesky (LDLT) or amg")
 

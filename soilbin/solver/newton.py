@@ -51,8 +51,10 @@ class NewtonResult:
     residuals: tuple  # residual norm at each iterate, the initial one first
 
 
-#: Halvings of the step a backtracking line search tries before taking the shortest.
-MAX_BACKTRACKS = 6
+#: Shortenings of the step a backtracking line search tries before taking the shortest.
+MAX_BACKTRACKS = 10
+#: Fraction of the Newton decrease of ‖R‖²/2 a backtracking step must achieve.
+ARMIJO = 1e-4
 #: A residual this many times the step's first ends the step (it is cut).
 DIVERGENCE = 10.0
 #: Iterations without a new smallest residual that end the step.
@@ -221,16 +223,24 @@ class NewtonSolver:
                                 f"after {n} iterations")
 
     def _line_search(self, x, a, da, norm0):
-        """Take the full step, or with backtracking halve it until the residual decreases."""
+        """The full step, or (``bt``) backtracking on φ(λ) = ‖R(x + λ dx)‖²/2: a step is
+        taken once it lowers φ by the Armijo fraction of the Newton decrease, φ(λ) ≤
+        (1 − 2 ARMIJO λ) φ(0), else shortened to the minimum of the quadratic through
+        φ(0), φ'(0) = −‖R_0‖² and φ(λ), kept within [0.1, 0.5] λ (Dennis & Schnabel 1996,
+        alg. A6.3.1), at most MAX_BACKTRACKS times."""
         step = 1.0
         self._set_iterate(x, a, self._dx, da, step)
         norm = self.residual(self._b)
         if self._opts.line_search is LineSearch.BASIC:
             return norm
         for _ in range(MAX_BACKTRACKS):
-            if np.isfinite(norm) and norm < norm0:
+            if np.isfinite(norm) and norm**2 <= (1.0 - 2.0 * ARMIJO * step) * norm0**2:
                 break
-            step /= 2.0
+            if np.isfinite(norm):
+                quadratic = step**2 * norm0**2 / (norm**2 - norm0**2 + 2.0 * step * norm0**2)
+                step = min(max(quadratic, 0.1 * step), 0.5 * step)
+            else:
+                step *= 0.1
             self._set_iterate(x, a, self._dx, da, step)
             norm = self.residual(self._b)
         return norm
