@@ -47,6 +47,12 @@ class Discretisation:
         return ufl.dx(domain=self.mesh, metadata={"quadrature_degree": q,
                                                    "quadrature_scheme": "default"}, **kwargs)
 
+    def facet_measure(self, facet_tags):
+        """The facet measure of the tagged facets, with the rule of the cell measure's degree
+        (a traction per deformed area is not polynomial: FFCx would pick 22 x 22 points)."""
+        return ufl.Measure("ds", domain=self.mesh, subdomain_data=facet_tags,
+                           metadata={"quadrature_degree": self.element.quadrature_degree})
+
     def displacement(self, w):
         """Displacement part of a function, trial or test function of ``space``."""
         return ufl.split(w)[0] if self.element.mixed else w

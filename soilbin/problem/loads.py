@@ -95,7 +95,7 @@ class Supports:
 def dead_loads(scene, tagged, disc, frame, kinematics, v):
     """External virtual work present from the first step: dead tractions and gravity
     (−γ e_z per volume of the step's configuration), or None."""
-    ds = ufl.Measure("ds", domain=disc.mesh, subdomain_data=tagged.facet_tags)
+    ds = disc.facet_measure(tagged.facet_tags)
     form = None
     for dead in scene.tractions:
         term = traction(disc, kinematics, dead.magnitude, frame.vector(dead.direction),
@@ -119,8 +119,7 @@ class BoundaryLoad:
         self._control, self._magnitude = loading.control, loading.magnitude
         self._supports, self._kinematics = supports, kinematics
         self.direction = frame.vector(loading.direction)
-        ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.facet_tags)
-        self._ds = ds(tagged.boundaries[loading.boundary])
+        self._ds = disc.facet_measure(tagged.facet_tags)(tagged.boundaries[loading.boundary])
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))
         self.external = (traction(disc, kinematics, self._load, self.direction, self._ds, v)
                          if loading.control is Control.FORCE else None)
