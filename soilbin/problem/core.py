@@ -45,7 +45,7 @@ class SoilProblem:
                      if scene.tool is not None else None)
         self.drive = (self.tool if scene.loading.boundary == TOOL else
                       BoundaryLoad(scene, tagged_mesh, disc, frame, self.kinematics, self.supports,
-                                   self.w, v))
+                                   v))
         self.bcs = self.supports.bcs
         self.newton = self._newton(v)
         self._factor, self._factors, self._travels = 0.0, (0.0, 0.0), (0.0, 0.0)

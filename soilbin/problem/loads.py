@@ -113,7 +113,7 @@ class BoundaryLoad:
     #: Per-step values beside displacement and force (see :meth:`observe`).
     columns = ("pressure",)
 
-    def __init__(self, scene, tagged, disc, frame, kinematics, supports, w, v):
+    def __init__(self, scene, tagged, disc, frame, kinematics, supports, v):
         loading = scene.loading
         mesh = disc.mesh
         self._control, self._magnitude = loading.control, loading.magnitude
