@@ -29,10 +29,7 @@ def tool_section_png(problem, path, depth_fraction=0.5):
     """Horizontal section through the tool at a fraction of its depth, on the initial
     geometry: soil displacement vectors (x-y) and the gap between soil and tool (rank 0
     draws; data gathered)."""
-    u = problem.displacement()
-    owned = u.function_space.dofmap.index_map.size_local
-    displacement = u.x.array.reshape(-1, 3)[:owned]
-    x = u.function_space.tabulate_dof_coordinates()[:owned] - displacement * problem.moves_mesh
+    x, displacement = problem.nodal_displacement()
     points, gap = problem.tool.gap()
     comm = problem.comm
     z_section = comm.allreduce(points[:, 2].min(initial=np.inf), op=MPI.MIN) * depth_fraction

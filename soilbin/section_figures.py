@@ -38,10 +38,7 @@ def _sections(problem):
 def sections_png(problem, scene, load, path):
     """One PNG of the three sections at the current (converged) state; collective."""
     comm = problem.comm
-    u = problem.displacement()
-    owned = u.function_space.dofmap.index_map.size_local
-    displacement = u.x.array.reshape(-1, 3)[:owned]
-    x = u.function_space.tabulate_dof_coordinates()[:owned] - displacement * problem.moves_mesh
+    x, displacement = problem.nodal_displacement()
     sections, low, high = _sections(problem)
     panels = []
     for title, normal, target, axes in sections:

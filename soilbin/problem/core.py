@@ -72,8 +72,8 @@ class SoilProblem:
         jacobian = self.kinematics.jacobian(residual, self.points,
                                             ufl.TrialFunction(self.disc.space), v)
         tool = self.tool
-        # symmetric Jacobian: small strain, no interface, and a symmetric material tangent
-        symmetric = not self.kinematics.incremental and not (tool and tool.interface)
+        # symmetric Jacobian: small strain, no tool, and a symmetric material tangent
+        symmetric = not self.kinematics.incremental and tool is None
         newton = NewtonSolver(self.comm, residual, jacobian, self.w, self.bcs,
                               self.update_material_state, self.scene.solver, self.disc,
                               nodal_terms=tool.nodal_terms if tool else [],
@@ -148,6 +148,14 @@ class SoilProblem:
     def displacement(self):
         """The total displacement as a P1 Function (nodal values)."""
         return self.kinematics.displacement_p1()
+
+    def nodal_displacement(self):
+        """(initial coordinates, total displacement), each (n, 3), at the owned mesh nodes."""
+        u = self.displacement()
+        owned = u.function_space.dofmap.index_map.size_local
+        displacement = u.x.array.reshape(-1, 3)[:owned]
+        x = u.function_space.tabulate_dof_coordinates()[:owned]
+        return x - displacement * self.moves_mesh, displacement
 
     def output_fields(self, names):
         """Named output fields: name -> (Function, update)."""

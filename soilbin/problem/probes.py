@@ -1,20 +1,9 @@
-"""Where things are on the initial mesh: the nodes of a face, the cell in front of it,
-and a value evaluated in one cell (on whichever rank owns it)."""
+"""Where things are on the initial mesh: the cell in front of a point, and a value
+evaluated in one cell (on whichever rank owns it)."""
 import numpy as np
 from mpi4py import MPI
 from dolfinx import fem
 from dolfinx.mesh import compute_midpoints
-
-from .loads import facets
-
-
-def face_nodes(tagged, name):
-    """Coordinates (n, 3) of the mesh nodes on a facet group (owned by this rank)."""
-    mesh = tagged.mesh
-    V1 = fem.FunctionSpace(mesh, ("Lagrange", 1))
-    dofs = fem.locate_dofs_topological(V1, mesh.topology.dim - 1, facets(tagged, name))
-    owned = dofs[dofs < V1.dofmap.index_map.size_local]
-    return V1.tabulate_dof_coordinates()[owned]
 
 
 def cell_ahead(mesh, point, direction):

@@ -22,7 +22,7 @@ from mpi4py import MPI
 from ..interface.rigid_tool import RigidToolContact
 from ..scene import Control
 from ..solver.stepping import Observation
-from .probes import CellValue, cell_ahead, face_nodes
+from .probes import CellValue, cell_ahead
 
 
 class RigidTool:
@@ -47,7 +47,9 @@ class RigidTool:
             initial_stress=geostatic and geostatic.stress)
         self.nodal_terms = [self.interface]
         self._comm = mesh.comm
-        self.face_points = {face: face_nodes(tagged, face) for face in tool.faces}
+        # the contact points of each face: its nodes on the initial mesh (owned by this rank)
+        ends = np.cumsum(self.interface.points_per_face)[:-1]
+        self.face_points = dict(zip(tool.faces, np.split(self.interface.reference_points, ends)))
         self._front_strain = CellValue(mesh, kinematics.volume_change(),
                                        cell_ahead(mesh, self._front_centre(), direction))
 

@@ -85,7 +85,7 @@ class NewtonSolver:
         """``before_residual()`` runs after ``w`` is set to an iterate, before assembly;
         ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``);
         ``border``, if given, carries the extra scalar unknown (see the module docstring):
-        ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d, ``move(da)``,
+        ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d, and
         ``value``/``set_value(a)``; ``symmetric``: whether the Jacobian can be symmetric
         (then ``symmetric_tangent()`` says whether it is at the current iterate)."""
         self._L, self._a = fem.form(residual), fem.form(jacobian)
@@ -108,6 +108,7 @@ class NewtonSolver:
         if border is not None:
             self._border_b, self._border_c = w.vector.duplicate(), w.vector.duplicate()
             self._border_z = w.vector.duplicate()
+            self._border_g = 0.0   # the border's equation at the last residual
 
     def include_force_scale(self, norm):
         """Make the residual floor relative to at least this force norm (e.g. of dead loads)."""
@@ -132,7 +133,8 @@ class NewtonSolver:
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
         norm = b.norm()
         if self._border is not None:
-            norm = math.hypot(norm, self._border.residual())
+            self._border_g = self._border.residual()
+            norm = math.hypot(norm, self._border_g)
         return norm
 
     def _bc_mismatch(self, x):
@@ -170,7 +172,7 @@ class NewtonSolver:
         b, c, z = self._border_b, self._border_c, self._border_z
         d = self._border.linearise(b, c)
         self.linear.solve(b, z)
-        da = (-self._border.residual() - c.dot(self._dx)) / (d - c.dot(z))
+        da = (-self._border_g - c.dot(self._dx)) / (d - c.dot(z))
         self._dx.axpy(-da, z)
         return da
 
