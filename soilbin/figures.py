@@ -14,7 +14,8 @@ def curve_png(records, scene, path, estimate=None):
     ax.plot([0.0] + [r.displacement for r in records], [0.0] + [r.force for r in records], "o-", ms=3)
     if estimate is not None:
         ax.axhline(estimate.draft, color="tab:red", ls="--", lw=1,
-                   label=f"{estimate.model}: {estimate.draft:.3g}")
+                   label=f"{estimate.model} (phi = {estimate.phi:.3g} deg, c = {estimate.c:.3g}): "
+                         f"{estimate.draft:.3g}")
         ax.legend(fontsize=8)
     ax.set_xlabel(f"displacement along {scene.loading.direction.value} [length]")
     ax.set_ylabel(f"force along {scene.loading.direction.value} [force]")
