@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from soilbin.cli import main
+from soilbin.closed_form.verification import column_settlement
 from soilbin.study import SUMMARY_KEYS, _earlier, _short_names, folder_name, load_study
 from conftest import ROOT
 
@@ -33,8 +34,8 @@ name = "curves"
 
 
 def settlement(E, nu=0.2, p=100.0, L=10.0):
-    """w = pL/M of the constrained column (eq. 7.1), M the constrained modulus."""
-    return p * L * (1 + nu) * (1 - 2 * nu) / (E * (1 - nu))
+    """w = pL/M of the constrained column (eq. 7.1) of the study's scene."""
+    return column_settlement(p, L, E, nu)
 
 
 def study_file(tmp_path, text, name="study.toml"):
