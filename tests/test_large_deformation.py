@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from soilbin.solver.stepping import run_load_steps
+from soilbin.run import collapse_pressure
+from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix
 from conftest import make_problem
 
@@ -185,12 +186,33 @@ def test_simple_shear_follows_the_jaumann_closed_form(tmp_path):
 
 
 def test_block_collapse_and_strip_load_collapse_in_large_deformation(solve):
-    """VII.2 and VII.4 (flexible strip load) keep their small-deformation tolerances."""
+    """VII.2 and VII.4 (flexible strip load): the strip's collapse pressure is where its
+    settlement per step reaches 100 times the elastic one (+0.893% measured)."""
     block, _ = solve("block-drucker-prager", "analysis.large_deformation=true")
     assert block["collapse_stress"] == pytest.approx(1732.05, rel=0.01)
-    strip, _ = solve("strip-load-von-mises", "analysis.large_deformation=true", "output.fields=[]")
+    strip, out = solve("strip-load-von-mises", "analysis.large_deformation=true", "output.fields=[]")
     assert strip["status"] == "collapse"
-    assert strip["collapse_pressure"] == pytest.approx((2 + math.pi) * 17.5, rel=0.03)
+    assert strip["collapse_pressure"] == pytest.approx((2 + math.pi) * 17.5, rel=0.015)
+    rows = read_curve(out)
+    k = next(i for i, row in enumerate(rows) if row["pressure"] == strip["collapse_pressure"])
+    elastic = rows[0]["displacement"] / rows[0]["pressure"]
+    compliance = [(b["displacement"] - a["displacement"]) / (b["pressure"] - a["pressure"]) / elastic
+                  for a, b in zip(rows, rows[1:])]
+    assert compliance[k - 1] >= 100.0 > max(compliance[:k - 1])
+
+
+def record(pressure, settlement):
+    return StepRecord(0, 0.0, settlement, pressure, 1, 0, 0, 0.0, (), {"pressure": pressure})
+
+
+def test_collapse_pressure_is_where_the_settlement_per_step_blows_up():
+    """Settlement per unit pressure 1e-4 (elastic), then 5e-3 (50x), then 2e-2 (200x): the
+    collapse is the third step, whatever comes after; none before it; a falling pressure too."""
+    curve = [record(10.0, 1e-3), record(20.0, 0.051), record(20.5, 0.061)]
+    assert collapse_pressure(curve) == 20.5
+    assert collapse_pressure(curve + [record(20.6, 0.062)]) == 20.5
+    assert collapse_pressure(curve[:2]) is None
+    assert collapse_pressure(curve[:2] + [record(19.0, 0.052)]) == 19.0
 
 
 ROUGH_PLATENS = """
