@@ -267,3 +267,34 @@ def test_a_rotated_frame_gives_the_same_curve(solve, tmp_path, large):
         assert b["displacement"] == pytest.approx(a["displacement"], rel=1e-6)
         assert b["force"] == pytest.approx(a["force"], rel=1e-6)
     assert curves[0][-1]["pressure"] > 1000.0   # well into the plastic range
+
+
+def test_corner_squares_keep_their_size_whatever_the_refinement():
+    """The 6 x 3 squares of side corner_size at the footing edge (x = 1, z = 0)."""
+    from mpi4py import MPI
+    from soilbin.meshes import BUILDERS, StripFootingParams
+    for refine in (1, 2):
+        tm = BUILDERS["strip_footing"].build(StripFootingParams(corner_size=0.05, refine=refine),
+                                             MPI.COMM_WORLD)
+        x = tm.mesh.geometry.x
+        nodes = tm.mesh.geometry.dofmap.array.reshape(-1, 8)
+        low, high = x[nodes].min(axis=1), x[nodes].max(axis=1)
+        inside = (low[:, 0] > 0.85 - 1e-9) & (high[:, 0] < 1.15 + 1e-9) & (low[:, 2] > -0.15 - 1e-9)
+        assert inside.sum() == 18
+        assert np.allclose(high[inside][:, [0, 2]] - low[inside][:, [0, 2]], 0.05)
+
+
+def test_rigid_rough_footing_reaches_its_full_settlement(solve):
+    """VII.4 footing in large deformation with squares of w/2 at its edge: to w = 0.1 in
+    (10% of the half-width) without failing or folding (no drop in the pressure);
+    +7.0% above (2 + π)c at the end (+3.0% in small deformation on this mesh)."""
+    summary, out = solve("strip-footing-von-mises", "analysis.large_deformation=true",
+                         "mesh.corner_size=0.05", "output.fields=[]")
+    assert summary["status"] == "complete"
+    rows = read_curve(out)
+    assert rows[-1]["displacement"] == pytest.approx(0.1)
+    limit = (2 + math.pi) * 17.5
+    pressures = [row["pressure"] for row in rows]
+    assert limit < pressures[-1] < 1.1 * limit
+    peak = pressures.index(max(pressures))
+    assert min(pressures[peak:]) > 0.98 * max(pressures)
