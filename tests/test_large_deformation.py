@@ -194,7 +194,7 @@ def test_block_collapse_and_strip_load_collapse_in_large_deformation(solve):
     assert strip["status"] == "collapse"
     assert strip["collapse_pressure"] == pytest.approx((2 + math.pi) * 17.5, rel=0.015)
     rows = read_curve(out)
-    k = next(i for i, row in enumerate(rows) if row["pressure"] == strip["collapse_pressure"])
+    k = min(range(len(rows)), key=lambda i: abs(rows[i]["pressure"] - strip["collapse_pressure"]))
     elastic = rows[0]["displacement"] / rows[0]["pressure"]
     compliance = [(b["displacement"] - a["displacement"]) / (b["pressure"] - a["pressure"]) / elastic
                   for a, b in zip(rows, rows[1:])]

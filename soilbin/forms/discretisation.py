@@ -70,3 +70,7 @@ class Discretisation:
     def to_world(self, values):
         """Nodal displacement dofs (n, 3) as world components."""
         return values if self.basis is None else values @ np.array(self.basis).T
+
+    def in_dof_axes(self, points):
+        """World points (n, 3) in the dofs' axes (rigid-body modes are built on these)."""
+        return points if self.basis is None else points @ np.array(self.basis)

@@ -16,7 +16,7 @@ around its edge (Prandtl's fan is centred there): the material at distance r
 from the edge rotates by about settlement / r, so the cells at the edge fold
 once the settlement reaches a few cell sizes, however they are shaped (on
 the VII.4 footing: unstructured cells of 0.02 at 3.6 sizes, squares of 0.02
-at 4.1). A footing that settles by w needs cells of about w / 2.5 there.
+at 4.1). A footing that settles by w needs cells of about w / 2 there.
 """
 import math
 from dataclasses import dataclass
