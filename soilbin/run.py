@@ -12,8 +12,21 @@ from .meshes import BUILDERS
 from .outdir import prepare_on_rank0
 from .output import RunFolder
 from .problem import SoilProblem
-from .scene import Headline
+from .scene import COLLAPSE_COMPLIANCE, Headline
 from .solver.stepping import StepperResult, run_load_steps
+
+
+def collapse_pressure(records):
+    """The pressure of the first step whose settlement increment per unit pressure increment
+    is at least COLLAPSE_COMPLIANCE times the first step's, or None."""
+    pressures = [0.0] + [r.columns["pressure"] for r in records]
+    settlements = [0.0] + [r.displacement for r in records]
+    elastic = settlements[1] / pressures[1]
+    for k in range(1, len(pressures)):
+        dp, dw = pressures[k] - pressures[k - 1], settlements[k] - settlements[k - 1]
+        if dw >= COLLAPSE_COMPLIANCE * elastic * dp:
+            return pressures[k]
+    return None
 
 
 def headline_results(scene, records):
@@ -27,8 +40,11 @@ def headline_results(scene, records):
         Headline.FINAL_PRESSURE: lambda: records[-1].columns["pressure"],
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
         Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
+        Headline.COLLAPSE_PRESSURE: lambda: collapse_pressure(records),
     }
-    return {key: read[result.of]() / result.divide_by for key, result in scene.headline.items()}
+    values = {key: read[result.of]() for key, result in scene.headline.items()}
+    return {key: None if value is None else value / scene.headline[key].divide_by
+            for key, value in values.items()}
 
 
 def draft_estimate(scene):
