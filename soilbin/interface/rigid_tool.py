@@ -43,10 +43,23 @@ class RigidToolContact:
         for bc in bcs:
             fixed[bc.dof_indices()[0]] = True
 
+        # Two compiled forms for all faces and directions (a form per face and component
+        # would each be compiled on a fresh machine): the face and the direction are constants.
+        face = fem.Constant(mesh, np.zeros(len(face_tags)))
+        direction = fem.Constant(mesh, np.zeros(3))
+        area_form, normal_form = (
+            fem.form(sum(face[k] * integrand * ds(tag) for k, tag in enumerate(face_tags)))
+            for integrand in (phi, ufl.dot(normal, direction) * phi))
+
+        def component(i):
+            direction.value[:] = np.eye(3)[i]
+            return self._nodal(normal_form)
+
         nodes, areas, normals = [], [], []
-        for tag in face_tags:
-            area = self._nodal(fem.form(phi * ds(tag)))
-            n = np.stack([self._nodal(fem.form(normal[i] * phi * ds(tag))) for i in range(3)], axis=1)
+        for k in range(len(face_tags)):
+            face.value[:] = np.eye(len(face_tags))[k]
+            area = self._nodal(area_form)
+            n = np.stack([component(i) for i in range(3)], axis=1)
             on_face = np.flatnonzero(area[:owned] > 0.0)
             nodes.append(on_face)
             areas.append(area[on_face])
