@@ -18,7 +18,6 @@ study's figure-8.*.png, figures 8.10-8.12 each case's sections-*.png.
 """
 import argparse
 import csv
-import json
 import os
 import re
 import subprocess
@@ -29,7 +28,7 @@ import numpy as np
 
 from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
 from soilbin.run import draft_estimate
-from soilbin.scene import load_scene
+from soilbin.study import earlier_summary, load_study
 
 ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "chapter8.toml"
@@ -41,14 +40,16 @@ KEYS = ("mesh.configuration", "mesh.tool_width", "mesh.rake_angle", "tool.bonded
 
 
 def cases(folder):
-    """(overrides dict, summary, curve rows, scene) of every case that has a summary."""
-    for summary_file in sorted(folder.glob("*/summary.json")):
-        summary = json.loads(summary_file.read_text())
+    """(overrides dict, summary, curve rows, scene) of every case of the study, in its order,
+    that has a summary."""
+    for case in load_study(STUDY).cases:
+        summary = earlier_summary(case, folder / case.name)
+        if summary is None:
+            continue
         values = dict(item.split("=", 1) for item in summary["overrides"])
-        with open(summary_file.parent / "curve.csv") as f:
+        with open(folder / case.name / "curve.csv") as f:
             rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-        scene = load_scene(summary_file.parent / "scene.toml")
-        yield {k: values[k].strip('"') for k in KEYS}, summary, rows, scene
+        yield {k: values[k].strip('"') for k in KEYS}, summary, rows, case.scene
 
 
 def estimates(scene):
@@ -73,7 +74,7 @@ def travel_at(rows, load):
 
 def case_table(results):
     lines = ["| tool | interface | deformation | travel at 36 / 72 / 108 lb [in] | lift at the "
-             "last step [lb] | estimate: cap surface / lab φ [lb] | status | Newton | wall (s) |",
+             "last step [lb] | estimate: cap surface / lab φ [lb] | status | Newton (steps) | wall (s) |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for values, summary, rows, scene in results:
         tool = (f"{values['mesh.tool_width']}-in, {values['mesh.rake_angle']}°, "
@@ -84,7 +85,7 @@ def case_table(results):
             " / ".join(travel_at(rows, load) for load in LOADS),
             f"{rows[-1]['lift']:.3g}" if rows else "–",
             " / ".join(estimates(scene)), summary["status"],
-            str(summary["newton_iterations"]), f"{summary['wall_s']:.0f} |"]))
+            f"{summary['newton_iterations']} ({summary['n_steps']})", f"{summary['wall_s']:.0f} |"]))
     return "\n".join(lines)
 
 
