@@ -12,7 +12,7 @@ from conftest import central_differences
 
 from soilbin.errors import InputError
 from soilbin.models import MODELS, DiMaggioSandler, ModifiedCap
-from soilbin.models.cap import SECTION_VII5
+from soilbin.models.cap import SECTION_VII5, CapHardening
 from soilbin.params import from_table
 from soilbin.tensors import IDENTITY, SQRT2, deviator, trace
 
@@ -27,11 +27,14 @@ SANDLER = DiMaggioSandler(**DS, X0=20.0)
 MODIFIED_T = ModifiedCap(**{**VII5, "A": 8.0}, X0=20.0, tension_cutoff=0.5)
 SANDLER_T = DiMaggioSandler(**{**DS, "A": 8.0}, X0=20.0, tension_cutoff=1.0)
 ALL = [MODIFIED, SANDLER, MODIFIED_T, SANDLER_T]
+# The cap that retreats with the dilation (hardening by the total plastic volume).
+RETREATING = [dataclasses.replace(m, hardening=CapHardening.VOLUMETRIC) for m in ALL]
 
 
 def model_id(model):
     name = type(model).__name__
-    return name + (f"-T{model.tension_cutoff:g}" if math.isfinite(model.tension_cutoff) else "")
+    name += f"-T{model.tension_cutoff:g}" if math.isfinite(model.tension_cutoff) else ""
+    return name + ("-volumetric" if model.hardening is CapHardening.VOLUMETRIC else "")
 
 
 def i1_j(sigma):
@@ -68,7 +71,7 @@ def mode_points(model):
     return deps, stress, np.array([c[2] for c in cases])
 
 
-@pytest.mark.parametrize("model", ALL, ids=model_id)
+@pytest.mark.parametrize("model", ALL + RETREATING, ids=model_id)
 def test_tangent_matches_central_differences(model):
     deps, stress, expected = mode_points(model)
     state = model.initial_state(len(deps), stress)
@@ -80,7 +83,7 @@ def test_tangent_matches_central_differences(model):
     assert error.max() < 1e-6, dict(zip(expected, error))
 
 
-@pytest.mark.parametrize("model", ALL, ids=model_id)
+@pytest.mark.parametrize("model", ALL + RETREATING, ids=model_id)
 def test_returned_stresses_lie_on_the_right_surfaces(model):
     rng = np.random.default_rng(2)
     m = 3000
@@ -128,12 +131,26 @@ def test_returned_stresses_lie_on_the_right_surfaces(model):
     a = (I1_tr - I1)[cap] / (9 * model.K * ((I1 - L)[cap] / R**2 / rho))
     b = (J_tr - J)[cap] / (model.G * J[cap] / rho)
     np.testing.assert_allclose(a, b, rtol=1e-7)
-    # The cap moves out only where the cap is active.
-    moved = new["cap_L"] != state["cap_L"]
-    assert (moved == cap).all() and (new["cap_L"][cap] > state["cap_L"][cap]).all()
+    # The cap moves out only where the cap is active; it never moves back, or with the
+    # volumetric hardening only where the soil dilates (failure surface, apex, cut-off,
+    # corner), following its plastic volume (B.11) down to L_min: there the plastic
+    # compaction is H(L) - H(L_n).
+    L_n = state["cap_L"]
+    assert ((new["cap_L"] > L_n) == cap).all()
+    if model.hardening is CapHardening.CAP_COMPACTION:
+        assert (new["cap_L"] >= L_n).all()
+        return
+    back = new["cap_L"] < L_n
+    assert set(np.unique(ys[back])) <= {S_FAILURE, S_CORNER, S_CUTOFF, S_CAP_CORNER}
+    assert back.sum() > 10 and new["cap_L"].min() >= model.L_min >= 0.0
+    free = back & (new["cap_L"] > model.L_min)
+    compaction = -(new["eps_p_vol"] - state["eps_p_vol"])
+    np.testing.assert_allclose(model.compaction(new["cap_L"])[0][free],
+                               model.compaction(L_n)[0][free] + compaction[free],
+                               rtol=1e-10, atol=1e-14)
 
 
-@pytest.mark.parametrize("model", ALL, ids=model_id)
+@pytest.mark.parametrize("model", ALL + RETREATING, ids=model_id)
 def test_large_increments_converge_in_one_vectorised_call(model):
     rng = np.random.default_rng(3)
     m = 2000
@@ -143,7 +160,7 @@ def test_large_increments_converge_in_one_vectorised_call(model):
     assert np.isfinite(sigma).all() and np.isfinite(tangent).all()
     I1, J = i1_j(sigma)
     assert (J - model.failure(I1)[0]).max() <= 1e-9 * np.abs(I1).max()
-    assert (new["cap_L"] >= model.initial_state(1, -3 * IDENTITY)["cap_L"][0]).all()
+    assert (new["cap_L"] >= model.L_min).all()
 
 
 def hydrostatic(model, state, d_eps_v):
@@ -211,20 +228,47 @@ def test_cap_stays_put_on_unloading_and_reloading_picks_up_the_law():
     assert (np.diff(X) >= 0).all()
 
 
-def test_dilatancy_on_the_failure_surface_does_not_soften_the_cap():
-    # Shear at constant volume: the stress climbs the failure surface (dilating)
-    # to the corner with the cap, which does not move (its normal is deviatoric there).
+def test_dilatancy_on_the_failure_surface_softens_the_cap():
+    # Shear at constant volume: the stress climbs the failure surface (dilating),
+    # and the cap follows the plastic volume back (B.11) until it meets the stress
+    # at the corner (L, F(L)), where the flow is deviatoric: the stress stays there
+    # (labelled cap or corner: the same point to rounding).
+    model = RETREATING[0]
+    state = model.initial_state(1, -3.0 * IDENTITY)
+    n = unit_deviator(5)
+    codes, L = [], [state["cap_L"][0]]
+    for _ in range(10):
+        sigma, _, state = model.update(np.atleast_2d(2e-3 * n), state)
+        codes.append(state["yield_state"][0])
+        L.append(state["cap_L"][0])
+    assert codes[:2] == [S_FAILURE, S_CAP_CORNER] and set(codes[2:]) <= {S_CAP, S_CAP_CORNER}
+    assert L[0] > L[1] > L[2] > 0.0
+    np.testing.assert_allclose(L[2:], L[2], rtol=1e-14)
+    I1, J = i1_j(sigma)
+    assert I1[0] == pytest.approx(L[-1], rel=1e-14)
+    assert J[0] == pytest.approx(model.failure(np.array(L[-1]))[0], rel=1e-12)
+    # The plastic volume is that of the cap (B.11), dilation tension positive.
+    H = model.compaction(np.array(L))[0]
+    assert state["eps_p_vol"][0] == pytest.approx(H[0] - H[-1], rel=1e-9)
+    assert state["eps_p_vol"][0] > 1e-4
+
+
+def test_dilatancy_does_not_soften_the_cap_with_cap_compaction_hardening():
+    # The same shear with hardening = "cap_compaction" (the default): the stress climbs
+    # the failure surface to the corner with the cap, which does not move (its normal
+    # is deviatoric there): a perfectly plastic vertex.
     model = MODIFIED
     state = model.initial_state(1, -3.0 * IDENTITY)
     L0 = state["cap_L"][0]
     n = unit_deviator(5)
     codes = []
     for _ in range(10):
-        _, _, state = model.update(np.atleast_2d(2e-3 * n), state)
+        _, tangent, state = model.update(np.atleast_2d(2e-3 * n), state)
         codes.append(state["yield_state"][0])
         assert state["cap_L"][0] == L0
     assert codes[0] == S_FAILURE and codes[-1] == S_CAP_CORNER
     assert state["eps_p_vol"][0] > 1e-4                 # dilation (tension positive)
+    assert np.abs(tangent[0] @ IDENTITY).max() < 1e-12  # no volumetric stiffness
 
 
 @pytest.mark.parametrize("model", [MODIFIED, SANDLER], ids=model_id)
@@ -321,6 +365,7 @@ def test_registry_builds_the_caps():
     ("modified_cap", "D", 0.0), ("modified_cap", "X0", -1.0),
     ("modified_cap", "tension_cutoff", -1.0), ("dimaggio_sandler", "A", -5.6),
     ("dimaggio_sandler", "R", -2.0), ("dimaggio_sandler", "nu", 0.5),
+    ("dimaggio_sandler", "hardening", "retreating"),
 ])
 def test_invalid_parameters_name_the_parameter(name, key, value):
     table = dict(VII5 if name == "modified_cap" else DS)

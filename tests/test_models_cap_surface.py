@@ -6,6 +6,8 @@ imposes: compression and shear in front, extension and shear beside and
 behind, lift (tension). Every return converges, lands on an admissible
 stress, and the consistent tangent matches central differences in each
 return mode reached (cap, cap/failure corner, failure surface, apex)."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -13,7 +15,7 @@ from conftest import central_differences
 
 from soilbin.errors import ReturnMapError
 from soilbin.models import DiMaggioSandler, ModifiedCap
-from soilbin.models.cap import SECTION_VII5
+from soilbin.models.cap import SECTION_VII5, CapHardening
 from soilbin.tensors import IDENTITY, SQRT2, deviator, trace
 
 S_ELASTIC, S_FAILURE, S_APEX, S_CAP, S_CAP_CORNER = 0.0, 1.0, 2.0, 4.0, 5.0
@@ -80,19 +82,22 @@ def test_tool_paths_converge_with_consistent_tangent(model):
     assert error.max() < 1e-6, dict(enumerate(error))
 
 
+@pytest.mark.parametrize("hardening", CapHardening, ids=lambda h: h.value)
 @pytest.mark.parametrize("model", [MODIFIED, SANDLER], ids=lambda m: type(m).__name__)
-def test_surface_point_at_zero_stress(model):
+def test_surface_point_at_zero_stress(model, hardening):
     """At the free surface itself (zero stress, the cap at the apex, every surface
     through the origin): compression yields on the cap, lift leaves the point
     stress free at the apex, shear with dilation at the cap/failure corner, which
-    is the origin too."""
+    is the origin too (the apex, where the cap retreats)."""
+    model = dataclasses.replace(model, hardening=hardening)
     n = unit(9)
     deps = np.array([-1e-4 * IDENTITY + 2e-4 * n, -1e-5 * IDENTITY - 1e-3 * n,
                      1e-4 * IDENTITY + 1e-5 * n, 1e-4 * IDENTITY - 1e-3 * n])
     state = model.initial_state(4)
     assert (state["cap_L"] == 0.0).all()
     sigma, tangent, new = model.update(deps, state)
-    np.testing.assert_array_equal(new["yield_state"], [S_CAP, S_CAP, S_APEX, S_CAP_CORNER])
+    corner = S_APEX if hardening is CapHardening.VOLUMETRIC else S_CAP_CORNER
+    np.testing.assert_array_equal(new["yield_state"], [S_CAP, S_CAP, S_APEX, corner])
     np.testing.assert_array_equal(sigma[2:], 0.0)
     assert not tangent[2:].any()
     assert_admissible(model, sigma, new["cap_L"])
@@ -100,25 +105,34 @@ def test_surface_point_at_zero_stress(model):
     assert np.abs(fd - tangent).max() / np.abs(model.stiffness).max() < 1e-6
 
 
+@pytest.mark.parametrize("hardening", CapHardening, ids=lambda h: h.value)
 @pytest.mark.parametrize("model", [MODIFIED, SANDLER], ids=lambda m: type(m).__name__)
-def test_shallow_point_along_a_tool_path(model):
+def test_shallow_point_along_a_tool_path(model, hardening):
     """A point 0.1 in deep pushed ahead of the tool (compression and shear, 30
     steps), passed by it (extension and reversed shear, 30 steps), then lifted
     (5 steps): every step converges through cap, failure surface, cap/failure
-    corner and apex, the stress stays admissible and the cap never moves back."""
+    corner and apex, and the stress stays admissible. The cap moves out ahead of
+    the tool; behind it, it follows the dilation back to the apex (volumetric
+    hardening) or never moves back (cap_compaction)."""
+    model = dataclasses.replace(model, hardening=hardening)
     n = unit(10)
     state = model.initial_state(1, geostatic([0.1]))
     ahead = -2e-5 * IDENTITY + 5e-5 * n
     behind = 2e-5 * IDENTITY - 5e-5 * n
     lift = 1e-4 * IDENTITY
-    seen = set()
+    seen, L = set(), [state["cap_L"][0]]
     for deps in [ahead] * 30 + [behind] * 30 + [lift] * 5:
         sigma, _, new = model.update(deps[None], state)
         assert_admissible(model, sigma, new["cap_L"])
-        assert new["cap_L"][0] >= state["cap_L"][0]
         seen.add(float(new["yield_state"][0]))
+        L.append(new["cap_L"][0])
         state = new
     assert seen == {S_CAP, S_FAILURE, S_CAP_CORNER, S_APEX}
+    assert (np.diff(L[:31]) > 0.0).all()
+    if hardening is CapHardening.VOLUMETRIC:
+        assert (np.diff(L[31:]) <= 0.0).all() and L[-1] == 0.0
+    else:
+        assert (np.diff(L[31:]) == 0.0).all()
 
 
 def test_compaction_beyond_the_soil_limit_is_an_error():

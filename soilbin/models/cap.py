@@ -36,24 +36,44 @@ the DiMaggio–Sandler law, and section VII.5's "N = 0.18" is W. The VII.5
 parameters (psi): E = 4000, nu = 0.35, A = 5.6, B = 0.11, C = 5.6,
 beta = 0.062 /psi, R = 2.0, W = 0.18, D = 0.05 /psi (:data:`SECTION_VII5`).
 
-Hardening. The cap's position L (history ``cap_L``; X in ``cap_X``) moves
-only with the plastic compaction produced on the cap, so the cap expands on
-loading and never retracts: dilatancy on the failure surface and on the
-cut-off does not soften it (the restriction of Sandler & Rubin 1979 that the
-cap does not move back), and under hydrostatic loading the plastic
-volumetric strain follows eps_v^p = W (1 - exp(-D X)) exactly (measured from
-the virgin cap X = 0; from X0 it is W (exp(-D X0) - exp(-D X))). The
-initial cap is at X0, or further out where the initial stress lies beyond it
-(the cap then passes through the initial stress: app. C, "specifying the
-position of the initial cap is at that state"), and at least at the apex.
+Hardening (``hardening``). The cap's end X (history ``cap_X``) is the
+hardening variable of B.11, eps_v^p = W (1 - exp(-D X)), through Sandler &
+Rubin's parameter kappa, X = kappa + R F(kappa), and the cap's centre is
+L = max(kappa, L_min) (``cap_L``), L_min = max(0, 3 p_lo): the centre never
+goes onto the tension side (Sandler & Rubin 1979: L = max(kappa, 0)); below
+L_min only the end moves, not below L_min (the cap is then the point L_min),
+and the cap, centred at L_min, is lower than the failure surface there,
+(X - L)/R < F(L). With ``volumetric``
+eps_v^p is the plastic volumetric strain of every surface, as in DiMaggio &
+Sandler (1971) and Sandler & Rubin (1979): the cap retreats when the soil
+dilates on the failure surface, at the apex and on the cut-off. This is the
+dissertation's model: ch. IV.2 "a cap which can expand or contract depending
+on loading or unloading conditions", app. C "the cap model is capable of
+handling unloading situation by contraction", and B.11 with the algorithm of
+its refs. [21, 60] (DiMaggio & Sandler, Sandler & Rubin). It is not yet the
+default: on the tine its first load step needs more Newton iterations than
+with ``cap_compaction`` and, on the coarse tine of tests/test_soil_bin.py,
+meets Newton iterates with more compaction than W at which no return exists
+(README, chapter VIII). With ``cap_compaction`` (the default, the model before
+issue 12) only the compaction produced on the cap moves it: it never
+retreats, and its centre may start on the tension side (L_min = 3 p_lo); its
+corner with the failure surface is then a perfectly plastic vertex with no
+bulk stiffness. Under hydrostatic loading
+either way eps_v^p = W (1 - exp(-D X)) exactly (measured from the virgin cap
+X = 0; from X0 it is W (exp(-D X0) - exp(-D X))). The initial cap ends at X0
+(with ``cap_compaction`` at least at the apex), or further out where the
+initial stress lies beyond it (the cap then passes through the initial
+stress: app. C, "specifying the position of the initial cap is at that
+state").
 
 Regions of the trial state (I1_tr, J_tr), with L = L_n (the failure surface
-and the corners are fixed during a step; the cap's normal at its corner
-(L, F(L)) is purely deviatoric, so a corner return does not move the cap):
+is fixed; the cap's normal at its corner (L, F(L)) is purely deviatoric):
 
-    cap         I1_tr >= L and f_C > 0           local Newton (p, J, dgamma, L)
-    cap corner  I1_tr < L, beyond the failure normal at L      (L, F(L))
-    failure     between the corners' normal cones              scalar root in p
+    cap         I1_tr > L and f_C > 0            local Newton (p, J, dgamma, kappa)
+    cap corner  I1_tr <= L, beyond the failure normal at L      (L, F(L)), L moving
+                back with the dilation (a bracketed root; fixed with cap_compaction)
+    failure     between the corners' normal cones              scalar root in p,
+                then the cap retreats (and where it passes the stress: cap corner)
     corner      beyond the normal cone of the failure surface's lowest point
                 p_lo = max(apex, -T): the apex, or its corner with the cut-off
     cut-off     p_tr < p_lo and J_tr < F(3 p_lo)               p = p_lo, s = s_tr
@@ -66,6 +86,7 @@ surface (codes of :mod:`.invariant_return`).
 """
 import abc
 import dataclasses
+import enum
 import math
 
 import numpy as np
@@ -80,6 +101,15 @@ from .invariant_return import (APEX, CAP, CAP_CORNER, CUTOFF, FAILURE, YIELD_TOL
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
                 "R": 2.0, "W": 0.18, "D": 0.05}
+
+
+class CapHardening(enum.Enum):
+    """What moves the cap (module doc, *Hardening*)."""
+    #: The plastic volumetric strain of every surface (B.11, DiMaggio & Sandler 1971,
+    #: Sandler & Rubin 1979): the cap retreats when the soil dilates, L >= max(0, apex).
+    VOLUMETRIC = "volumetric"
+    #: Only the cap's own compaction: the cap never retreats, L >= apex.
+    CAP_COMPACTION = "cap_compaction"
 
 
 def _positive(doc):
@@ -100,6 +130,12 @@ class CapModel(IsotropicElasticity):
                       doc="initial cap position X (compression-positive I1); moved out to pass "
                           "through the initial stress where that lies beyond it")
     tension_cutoff: float = tension_cutoff_param()
+    hardening: CapHardening = param(
+        CapHardening.CAP_COMPACTION,
+        doc="what moves the cap: cap_compaction (only the cap's own compaction: the cap never "
+            "retreats) or volumetric (the plastic volumetric strain of every surface, B.11: "
+            "the cap retreats when the soil dilates, its centre L >= 0; Sandler & Rubin 1979, "
+            "the dissertation's)")
 
     history = {"stress": (6,), "cap_L": (), "cap_X": (), "eps_p_vol": (), "eps_p_eq": (),
                "yield_state": ()}
@@ -133,9 +169,35 @@ class CapModel(IsotropicElasticity):
             return p, F, dF
         return p_apex, 0.0, float(self.failure(np.array(3.0 * p_apex))[1])
 
+    @property
+    def L_min(self):
+        """The smallest cap centre L: the apex (or the cut-off), and with the
+        volumetric hardening not on the tension side (Sandler & Rubin: L = max(kappa, 0))."""
+        L = 3.0 * self.lowest[0]
+        return max(L, 0.0) if self.hardening is CapHardening.VOLUMETRIC else L
+
     def X(self, L):
         """Cap position X(L) = L + R F(L)."""
         return L + self.R * self.failure(L)[0]
+
+    def kappa(self, X):
+        """The hardening parameter kappa with X(kappa) = X (X is increasing): the cap
+        centre is L = max(kappa, L_min) (Sandler & Rubin 1979)."""
+        X = np.asarray(X, dtype=float)
+        L_min = self.L_min
+        X_min = float(self.X(np.array(L_min)))
+        F_min = max(float(self.failure(np.array(L_min))[0]), 0.0)
+        # X(k) >= k above L_min (F >= 0) and X(k) <= k + R F(L_min) below it.
+        lo = np.where(X >= X_min, L_min, X - self.R * F_min)
+        hi = np.where(X >= X_min, X, L_min)
+
+        def position(k, idx):
+            F, dF, _ = self.failure(k)
+            return k + self.R * F - X[idx], 1.0 + self.R * dF
+
+        kappa, converged = scalar_root(position, lo, hi)
+        check_converged(self, converged, len(X))
+        return kappa
 
     def compaction(self, L):
         """(H, dH/dL): the plastic compaction W (1 - exp(-D X(L))) of the cap at L (B.11)."""
@@ -147,19 +209,15 @@ class CapModel(IsotropicElasticity):
 
     def initial_state(self, n, stress0=None):
         state = super().initial_state(n, stress0)
-        L_min = 3.0 * self.lowest[0]
-        X0 = max(self.X0, float(self.X(np.array(L_min))))
-
-        def position(L, k):
-            F, dF, _ = self.failure(L)
-            return L + self.R * F - X0, 1.0 + self.R * dF
-
-        L, _ = scalar_root(position, np.full(1, L_min), np.full(1, X0))
-        L = np.full(n, L[0])
+        X0 = max(self.X0, self.L_min)
+        if self.hardening is CapHardening.CAP_COMPACTION:
+            X0 = max(X0, float(self.X(np.array(self.L_min))))
+        kappa0 = float(self.kappa(np.array([X0]))[0])
+        L = np.full(n, max(kappa0, self.L_min))
         p, J = invariants(state["stress"])
         I1 = 3.0 * p
-        F, _, _ = self.failure(L)
-        beyond = np.flatnonzero((I1 > L) & (((I1 - L) / self.R) ** 2 + J**2 > F**2))
+        height = (X0 - L) / self.R     # F(L), or less where kappa < L_min
+        beyond = np.flatnonzero((I1 > L) & (((I1 - L) / self.R) ** 2 + J**2 > height**2))
         if beyond.size:
             # The cap through the initial stress: F(L)^2 = ((I1 - L)/R)^2 + J^2 on
             # [L, I1] (increasing in L); I1 itself where the stress is beyond failure.
@@ -174,7 +232,10 @@ class CapModel(IsotropicElasticity):
             Lb, _ = scalar_root(through, L[beyond], I1b)
             L[beyond] = np.where(admissible, Lb, I1b)
         state["cap_L"] = L
+        # X(L), but X0 itself where the cap has retreated past L_min (kappa0 < L_min).
         state["cap_X"] = self.X(L)
+        if kappa0 < self.L_min:
+            state["cap_X"][L == self.L_min] = X0
         return state
 
     def integrate(self, deps, state):
@@ -182,18 +243,24 @@ class CapModel(IsotropicElasticity):
         bulk = LinearBulk(K)
         trial = Trial.split(deps, state["stress"], G)
         p_n, de_v, J_tr = trial.p_n, trial.de_v, trial.J_tr
-        L_n = state["cap_L"]
+        L_n, X_n = state["cap_L"], state["cap_X"]
         p_tr = bulk.pressure(p_n, de_v)
         response = Response(trial, bulk, p_tr)
         p_lo, J_lo, dF_lo = self.lowest
         F_L, dF_L, _ = self.failure(L_n)
+        # kappa = L but where the cap has retreated past L_min (module doc).
+        kappa_n = L_n.copy()
+        shrunk = np.flatnonzero(X_n < L_n + R * F_L)       # X_n < X(L_n)
+        kappa_n[shrunk] = self.kappa(X_n[shrunk])
+        height = F_L.copy()        # of the cap at L: (X - L) / R
+        height[shrunk] = (X_n[shrunk] - L_n[shrunk]) / R
         scale = 3.0 * np.abs(p_tr) + J_tr + np.abs(state["cap_X"]) + self.C
         tol = YIELD_TOL * scale
 
         with np.errstate(over="ignore", invalid="ignore"):
             f_fail = J_tr - self.failure(3.0 * p_tr)[0]
         cap_side = 3.0 * p_tr > L_n
-        f_cap = np.hypot((3.0 * p_tr - L_n) / R, J_tr) - F_L
+        f_cap = np.hypot((3.0 * p_tr - L_n) / R, J_tr) - height
         cap = cap_side & (f_cap > tol)
         low = ~cap_side & ((f_fail > tol) | (p_lo - p_tr > tol))
         # Wedges of the fixed corners: g(p) = E(p) - de_v - 3 F'(3p) (J_tr - F(3p)) / G is
@@ -207,8 +274,6 @@ class CapModel(IsotropicElasticity):
         fail = low & ~corner & ~cut & ~cap_corner
 
         response.fixed(np.flatnonzero(corner), p_lo, J_lo, APEX)
-        ic = np.flatnonzero(cap_corner)
-        response.fixed(ic, L_n[ic] / 3.0, F_L[ic], CAP_CORNER)
         it = np.flatnonzero(cut)
         zero = np.zeros(it.size)
         response.solved(it, np.full(it.size, p_lo), J_tr[it], zero, zero, zero, zero + 1.0, CUTOFF)
@@ -217,14 +282,24 @@ class CapModel(IsotropicElasticity):
         if ifail.size:
             self._failure_return(trial, bulk, ifail, p_lo, L_n[ifail] / 3.0, response)
 
-        L = L_n.copy()
+        kappa = kappa_n.copy()
         icap = np.flatnonzero(cap)
         if icap.size:
-            L[icap] = self._cap_return(trial, bulk, icap, p_tr[icap], L_n[icap], scale[icap],
-                                       3.0 * p_lo, response)
+            kappa[icap] = self._cap_return(trial, bulk, icap, p_tr[icap], kappa_n[icap],
+                                           scale[icap], response)
+        ic = np.flatnonzero(cap_corner)
+        if self.hardening is CapHardening.VOLUMETRIC:
+            self._retreat(trial, bulk, np.flatnonzero(corner | cut | fail), ic, kappa_n, kappa,
+                          response)
+        else:
+            response.fixed(ic, L_n[ic] / 3.0, F_L[ic], CAP_CORNER)
 
         sigma, tangent, compaction, eq = response.finish(bulk, G)
-        new_state = {"stress": sigma, "cap_L": L, "cap_X": np.where(cap, self.X(L), state["cap_X"]),
+        moved = np.flatnonzero(kappa != kappa_n)
+        L, X = L_n.copy(), X_n.copy()
+        L[moved] = np.maximum(kappa[moved], self.L_min)
+        X[moved] = self.X(kappa[moved])
+        new_state = {"stress": sigma, "cap_L": L, "cap_X": X,
                      "eps_p_vol": state["eps_p_vol"] - compaction,
                      "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": response.code}
         return sigma, tangent, new_state
@@ -248,36 +323,107 @@ class CapModel(IsotropicElasticity):
         p_e, p_J = 1.0 / dg, 3.0 * dF / (G * dg)
         response.solved(idx, p, F, p_e, p_J, 3.0 * dF * p_e, 3.0 * dF * p_J, FAILURE)
 
-    def _cap_return(self, trial, bulk, idx, p_tr, L_n, scale, L_min, response):
-        """Return onto the hardening cap (smooth_return with h = L); returns L."""
-        R = self.R
+    def _retreat(self, trial, bulk, idx, ic, kappa_n, kappa, response):
+        """The cap of the points ``idx`` (apex, cut-off, failure surface: dilating)
+        follows their plastic volumetric strain back (B.11); where its centre
+        L = max(kappa, L_min) would pass the stress (I1 > L), and at the points
+        ``ic`` (beyond the failure surface's normal at the corner), the stress is the
+        corner (:meth:`_corner_return`). Sets ``kappa`` and ``response`` there."""
+        compaction = trial.de_v[idx] - bulk.strain(response.p[idx], trial.p_n[idx])
+        kappa[idx] = self._kappa_at(self.compaction(kappa_n[idx])[0] + compaction)
+        behind = 3.0 * response.p[idx] > np.maximum(kappa[idx], self.L_min)
+        corner = np.concatenate([ic, idx[behind]])
+        if corner.size:
+            kappa[corner] = self._corner_return(trial, bulk, corner, kappa_n[corner], response)
 
-        def surface(p, J, L, k):
-            F, dF, _ = self.failure(L)
+    def _kappa_at(self, H):
+        """kappa whose compaction W (1 - exp(-D X(kappa))) is H < W (B.11), the cap's
+        end X not below L_min (there the cap is the point L_min)."""
+        return self.kappa(np.maximum(-np.log1p(-H / self.W) / self.D, self.L_min))
+
+    def _corner_return(self, trial, bulk, idx, kappa_n, response):
+        """The stress at the corner (L, F(L)) of a retreating cap: the plastic strain
+        is that of the failure surface (compaction H(L) - H(kappa_n) <= 0) plus
+        deviatoric flow on the cap (its normal at the corner), so the volumetric split
+
+            g(L) = E(L/3; p_n) - de_v + H(L) - H(kappa_n) = 0
+
+        is a monotone scalar equation on [L_min, kappa_n] (g(kappa_n) > 0 here): a
+        bracketed root, and dp/de_v = 1 / (3 g'(L)) > 0. Where g(L_min) >= 0 the
+        corner stays at L_min (p, J fixed; the apex if F(L_min) = 0) and kappa
+        follows the compaction below L_min. Returns kappa."""
+        p_n, de_v = trial.p_n[idx], trial.de_v[idx]
+        H_n = self.compaction(kappa_n)[0]
+        L_min = self.L_min
+        every = np.arange(idx.size)
+
+        def g(L, k):
+            H, dH = self.compaction(L)
+            return (bulk.strain(L / 3.0, p_n[k]) - de_v[k] + H - H_n[k],
+                    bulk.compliance(L / 3.0) / 3.0 + dH)
+
+        g_min = g(np.full(idx.size, L_min), every)[0]
+        at_min = g_min >= 0.0      # always where kappa_n < L_min (I1_tr <= L_n here)
+        kappa = np.full(idx.size, L_min)
+        moving = np.flatnonzero(~at_min)
+        if moving.size:
+            kappa[moving], converged = scalar_root(lambda L, k: g(L, moving[k]),
+                                                   np.full(moving.size, L_min),
+                                                   kappa_n[moving].copy())
+            check_converged(self, converged, len(trial.p_n))
+        fixed = np.flatnonzero(at_min)
+        if fixed.size:   # the compaction left at L_min: H(kappa) = H(L_min) - g(L_min)
+            kappa[fixed] = self._kappa_at(self.compaction(np.array(L_min))[0] - g_min[fixed])
+        L = np.maximum(kappa, L_min)
+        F, dF, _ = self.failure(L)
+        L_e = np.where(at_min, 0.0, 1.0 / g(L, every)[1])
+        zero = np.zeros(idx.size)
+        code = np.where(at_min & (F <= 0.0), APEX, CAP_CORNER)
+        for c in np.unique(code):
+            k = code == c
+            response.solved(idx[k], L[k] / 3.0, np.maximum(F[k], 0.0), L_e[k] / 3.0, zero[k],
+                            dF[k] * L_e[k], zero[k], c)
+        return kappa
+
+    def _cap_return(self, trial, bulk, idx, p_tr, kappa_n, scale, response):
+        """Return onto the hardening cap (smooth_return with h = kappa, the cap centre
+        L = max(kappa, L_min): below L_min only the cap's end X(kappa) moves, and its
+        height (X - L) / R falls short of F(L)); returns kappa."""
+        R, L_min = self.R, self.L_min
+        volumetric = self.hardening is CapHardening.VOLUMETRIC
+
+        def surface(p, J, kappa, k):
+            F, dF, _ = self.failure(kappa)
+            free = kappa >= L_min
+            L = np.where(free, kappa, L_min)
             a = (3.0 * p - L) / R
             rho = np.hypot(a, J)
             r3 = rho**3
-            return (rho - F, 3.0 * a / (R * rho), J / rho, -a / (R * rho) - dF,
+            height = np.where(free, F, (kappa - L_min) / R + F)
+            f_h = np.where(free, -a / (R * rho) - dF, -1.0 / R - dF)
+            return (rho - height, 3.0 * a / (R * rho), J / rho, f_h,
                     9.0 * J**2 / (R**2 * r3), -3.0 * a * J / (R * r3), a**2 / r3,
-                    -3.0 * J**2 / (R**2 * r3), a * J / (R * r3), scale[k])
+                    np.where(free, -3.0 * J**2 / (R**2 * r3), 0.0),
+                    np.where(free, a * J / (R * r3), 0.0), scale[k])
 
-        def admissible(p, J, L, k):
-            return L >= L_min
+        def admissible(p, J, kappa, k):
+            # A cap of positive size; without the retreat kappa never goes below L_min.
+            return self.X(kappa) >= L_min if volumetric else kappa >= L_min
 
-        # Hardening (B.11): W (1 - exp(-D X(L))) - W (1 - exp(-D X(L_n))) = compaction.
-        H_n = self.compaction(L_n)[0]
+        # Hardening (B.11): W (1 - exp(-D X(kappa))) - W (1 - exp(-D X(kappa_n))) = compaction.
+        H_n = self.compaction(kappa_n)[0]
 
-        def hardening(L, compaction, k):
-            H, dH = self.compaction(L)
-            return H - H_n[k] - compaction, dH, -np.ones_like(L)
+        def hardening(kappa, compaction, k):
+            H, dH = self.compaction(kappa)
+            return H - H_n[k] - compaction, dH, -np.ones_like(kappa)
 
-        x0 = np.stack([p_tr, trial.J_tr[idx], np.zeros(idx.size), L_n], axis=1)
-        p, J, _, L, sens, converged = smooth_return(
-            surface, hardening, bulk, self.G, trial, idx, p_tr, L_n, x0, scale,
+        x0 = np.stack([p_tr, trial.J_tr[idx], np.zeros(idx.size), kappa_n], axis=1)
+        p, J, _, kappa, sens, converged = smooth_return(
+            surface, hardening, bulk, self.G, trial, idx, p_tr, kappa_n, x0, scale,
             admissible=admissible)
         check_converged(self, converged, len(trial.p_n))
         response.solved(idx, p, J, *sens, CAP)
-        return L
+        return kappa
 
 
 @dataclasses.dataclass(frozen=True)
