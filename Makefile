@@ -6,13 +6,17 @@ STAMP   := $(VENV)/.soilbin-installed
 SCENE   ?= scenes/tine-2in-90deg.toml
 export OMP_NUM_THREADS := 1
 
-.PHONY: run test bench bench-quick setup system clean
+.PHONY: run test test-slow bench bench-quick setup system clean
 
 run: setup
 	$(VENV)/bin/soilbin run $(SCENE)
 
 test: setup
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q -m "not slow" tests
+
+# the slow tests (larger meshes, MPI, long load paths); CI runs both
+test-slow: setup
+	$(PY) -m pytest -q -m slow tests
 
 # run time against error; results in runs/benchmark/ (README: python scripts/benchmark.py --readme README.md)
 bench: setup

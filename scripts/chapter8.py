@@ -18,6 +18,7 @@ study's figure-8.*.png, figures 8.10-8.12 each case's sections-*.png.
 """
 import argparse
 import csv
+import json
 import os
 import re
 import subprocess
@@ -28,7 +29,8 @@ import numpy as np
 
 from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
 from soilbin.run import draft_estimate
-from soilbin.study import earlier_summary, load_study
+from soilbin.scene import load_scene
+from soilbin.study import load_study
 
 ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "chapter8.toml"
@@ -40,16 +42,21 @@ KEYS = ("mesh.configuration", "mesh.tool_width", "mesh.rake_angle", "tool.bonded
 
 
 def cases(folder):
-    """(overrides dict, summary, curve rows, scene) of every case of the study, in its order,
-    that has a summary."""
+    """(overrides dict, summary, curve rows, scene run) of every case of the study, in its
+    order, that left a summary in its folder (of this code or an earlier one: the
+    study itself decides what to run again)."""
     for case in load_study(STUDY).cases:
-        summary = earlier_summary(case, folder / case.name)
-        if summary is None:
+        run = folder / case.name
+        try:
+            summary = json.loads((run / "summary.json").read_text())
+        except OSError:
+            continue
+        if summary["status"] == "interrupted":
             continue
         values = dict(item.split("=", 1) for item in summary["overrides"])
-        with open(folder / case.name / "curve.csv") as f:
+        with open(run / "curve.csv") as f:
             rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-        yield {k: values[k].strip('"') for k in KEYS}, summary, rows, case.scene
+        yield {k: values[k].strip('"') for k in KEYS}, summary, rows, load_scene(run / "scene.toml")
 
 
 def estimates(scene):
@@ -117,9 +124,12 @@ def main():
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "chapter8")
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--readme", type=Path, help="write the tables into this file")
+    parser.add_argument("--no-run", action="store_true",
+                        help="only the tables, from the cases finished so far")
     args = parser.parse_args()
-    subprocess.run([SOILBIN, "study", STUDY, "--out", args.out, "--jobs", str(args.jobs)],
-                   cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    if not args.no_run:
+        subprocess.run([SOILBIN, "study", STUDY, "--out", args.out, "--jobs", str(args.jobs)],
+                       cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
     results = list(cases(args.out))
     text = (case_table(results) + "\n\nVolume change of the soil element in front of the embedded "
             "2-in vertical tool with the interface: incremental volumetric strain × 10³ per 12-lb "
