@@ -185,6 +185,7 @@ def test_simple_shear_follows_the_jaumann_closed_form(tmp_path):
     assert sigma[0, 2, 2] == pytest.approx(-G * (1 - math.cos(1.0)), rel=0.01)
 
 
+@pytest.mark.slow
 def test_block_collapse_and_strip_load_collapse_in_large_deformation(solve):
     """VII.2 and VII.4 (flexible strip load): the strip's collapse pressure is where its
     settlement per step reaches 100 times the elastic one (+0.893% measured)."""
@@ -250,6 +251,7 @@ large_deformation = true
 
 
 @pytest.mark.parametrize("large", [True, False])
+@pytest.mark.slow
 def test_a_rotated_frame_gives_the_same_curve(solve, tmp_path, large):
     """Frame indifference of the whole code: the scene turned by an arbitrary rotation."""
     scene = tmp_path / "platens.toml"

@@ -18,6 +18,7 @@ def curve(path):
     ("strip-footing-von-mises", ["--set", "loading.steps=5", "--set", "loading.magnitude=0.03"]),
     ("column-elastic", []),
 ])
+@pytest.mark.slow
 def test_two_ranks_match_serial(tmp_path, scene, overrides):
     runs = {}
     for ranks in (1, 2):
@@ -36,6 +37,7 @@ def test_two_ranks_match_serial(tmp_path, scene, overrides):
         assert r2["force"] == pytest.approx(r1["force"], rel=1e-6)
 
 
+@pytest.mark.slow
 def test_force_controlled_tine_with_progress_lines_matches_serial(tmp_path):
     """The tool's bordered Newton and the tool section under two ranks; without --json the
     progress lines are printed (rank 0 alone must not evaluate a collective for them)."""

@@ -55,6 +55,7 @@ def test_bonded_tool_is_stiffer_than_the_interface():
     assert bonded.force > with_interface.force
 
 
+@pytest.mark.slow
 def test_force_controlled_tool_reaches_the_draft_of_the_displacement_controlled_run():
     """Force control: the tool's travel is an unknown; the draft equals the applied force
     and the tool stops where the displacement-controlled run needed that draft."""
@@ -66,6 +67,7 @@ def test_force_controlled_tool_reaches_the_draft_of_the_displacement_controlled_
     assert max(pulled.residuals[1:]) < pulled.residuals[0]   # Newton with the border converges
 
 
+@pytest.mark.slow
 def test_embedded_half_model_reports_the_whole_tool():
     """Across the symmetry plane the mesh of a 2-in embedded tool is that of a 1-in tool
     against the glass wall: the whole embedded tool carries exactly twice the draft."""
@@ -75,6 +77,7 @@ def test_embedded_half_model_reports_the_whole_tool():
     assert embedded.columns["lift"] == pytest.approx(2.0 * wall.columns["lift"], rel=1e-10)
 
 
+@pytest.mark.slow
 def test_force_controlled_run_lands_on_the_stated_loads_and_draws_the_sections(tmp_path):
     from soilbin.run import run_scene
     from soilbin.scene import load_scene

@@ -69,6 +69,7 @@ def test_retaining_wall_passive_coefficient_approaches_rankine_from_above(solve)
     assert fine["passive_coefficient"] - rankine < 0.75 * (coarse["passive_coefficient"] - rankine)
 
 
+@pytest.mark.slow
 def test_container_footing_drucker_prager_is_stiffer_than_the_cap(solve):
     """VII.5: the dissertation's ranking, Drucker-Prager the stiffest (at 0.1 in)."""
     coarse = ("loading.magnitude=0.1", "loading.steps=4")
