@@ -53,3 +53,33 @@ def test_lancellotta_grows_with_wall_friction_below_coulomb():
     assert values[-1] == pytest.approx(7.2497, abs=1e-4)
     with pytest.raises(ValueError, match="delta"):
         lancellotta_passive(30.0, 31.0)
+
+
+@pytest.mark.parametrize("phi, K0", [(25.0, 0.577), (35.0, 0.43), (40.0, 0.43)])
+def test_smooth_wall_passive_coefficient_is_rankine_within_twelve_percent(solve, phi, K0):
+    """VII.3 with c = 0 on the default mesh: Kp above Rankine (measured +3.2%, +7.7%, +9.8%):
+    the associated flow's dilatancy locks the trilinear cells (the excess grows with φ and
+    does not fall with h: README, VII.3). K0 = 0.43 of VII.3 lies outside the c = 0 cone at
+    depth for φ <= 30°: there Jaky's 1 − sin φ."""
+    summary, _ = solve("retaining-wall-passive", f"materials.sand.phi={phi}", f"geostatic.K0={K0}")
+    assert summary["status"] == "complete"
+    assert rankine_passive(phi) < summary["passive_coefficient"] < 1.12 * rankine_passive(phi)
+
+
+def test_rough_wall_lies_between_the_lower_bound_and_coulombs_wedge(solve, tmp_path):
+    """The wall's vertical displacement held too: the soil sticks to it, so the friction it
+    mobilises is the soil's own (δ up to φ). Kp (normal component, 10.4 measured at φ = 35°)
+    lies above Lancellotta's lower bound for δ = φ (7.25) and below Coulomb's plane wedge
+    (18.8, which overestimates for large δ)."""
+    from soilbin.closed_form import narrow_tine_draft
+    from soilbin.run import run_scene
+    from soilbin.scene import load_scene
+    from conftest import SCENES
+
+    rough = tmp_path / "retaining-wall-rough.toml"
+    rough.write_text((SCENES / "retaining-wall-passive.toml").read_text()
+                     + '\n[[supports]]\nboundary = "wall"\nfix = ["z"]\n')
+    summary = run_scene(load_scene(rough), tmp_path / "out")
+    coulomb = 2.0 * narrow_tine_draft(width=1.0, depth=1.0, rake=90.0, phi=35.0, delta=35.0,
+                                      gamma=1.0, crescents=0).draft
+    assert lancellotta_passive(35.0, 35.0) < summary["passive_coefficient"] < coulomb

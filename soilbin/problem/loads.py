@@ -52,8 +52,8 @@ def traction(disc, kinematics, magnitude, vector, measure, v):
 class Supports:
     """Dirichlet conditions: supports, plane strain, and under displacement control the driven
     boundary, whose prescribed values :meth:`move` sets. Components are the scene's own axes;
-    in a rotated frame a boundary must be held in all three. A dof held at zero stays held
-    where the driven boundary also holds it: the driven boundary moves its other dofs."""
+    in a rotated frame a boundary must be held in all three. Where the driven boundary meets a
+    support, the dofs the support holds stay held: the driven boundary moves its other dofs."""
 
     def __init__(self, scene, tagged, disc, frame):
         mesh, V = disc.mesh, disc.displacement_space
