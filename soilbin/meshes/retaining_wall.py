@@ -4,8 +4,8 @@
 The soil fills x in [0, length], z in [-depth, 0] (z up, ground surface
 z = 0); the wall is x = 0 for z in [-wall_height, 0], and below its toe x = 0
 is the separate group ``below_wall``. So that every mesh has the same groups,
-the soil must reach below the toe (wall_height < depth). The elements are
-element_size long at the toe, where the moving wall meets the held soil below
+the soil must reach below the toe (wall_height < depth). The elements are at
+most element_size long at the toe, where the moving wall meets the held soil below
 it, and grow by the factor growth away from it: in x from the wall, in z up
 to the surface and down to the base (growth = 1, the default, is a uniform
 mesh). refine then splits each of them into refine^2 in the x-z plane
@@ -25,7 +25,7 @@ class RetainingWallParams(Params):
     length: float = length_param(30.0, "extent of the soil in x, from the wall")
     depth: float = length_param(15.0, "depth of the soil (> wall_height)")
     thickness: float = length_param(1.0, "thickness of the slab in y (one element)")
-    element_size: float = length_param(1.0, "length of the elements at the wall's toe")
+    element_size: float = length_param(1.0, "largest length of the elements at the wall's toe")
     growth: float = param(1.0, lo=1.0, hi=2.0, doc="ratio of neighbouring element lengths away from the toe")
     refine: int = refine_param("splits every element into refine^2 in x-z "
                                "(nested; refine = 2 gives 4x the cells)")
