@@ -15,7 +15,6 @@ The results go to ``runs/benchmark/results.json`` and ``results.md``;
 """
 import argparse
 import json
-import math
 import os
 import resource
 import subprocess
@@ -23,6 +22,9 @@ import sys
 import time
 from datetime import date
 from pathlib import Path
+
+from soilbin.closed_form.verification import (column_settlement, prandtl_limit_pressure,
+                                              unconfined_strength)
 
 ROOT = Path(__file__).resolve().parent.parent
 MARKERS = ("<!-- benchmark:start -->\n", "<!-- benchmark:end -->")
@@ -68,16 +70,13 @@ def result_value(scene, records):
     over the loaded boundary's current area, as in the run's summary)."""
     if scene.name.startswith(("strip-footing", "strip-load")):
         c = scene.materials[scene.regions["soil"]].c
-        return "error %", 100 * (peak_pressure(records) / ((2 + math.pi) * c) - 1)
+        return "error %", 100 * (peak_pressure(records) / prandtl_limit_pressure(c) - 1)
     if scene.name.startswith("block"):
         soil = scene.materials[scene.regions["soil"]]
-        phi = math.radians(soil.phi)
-        strength = 2 * soil.c * math.cos(phi) / (1 - math.sin(phi))
-        return "error %", 100 * (peak_pressure(records) / strength - 1)
+        return "error %", 100 * (peak_pressure(records) / unconfined_strength(soil.c, soil.phi) - 1)
     if scene.name.startswith("column"):
         soil = scene.materials[scene.regions["soil"]]
-        M = soil.E * (1 - soil.nu) / ((1 + soil.nu) * (1 - 2 * soil.nu))
-        exact = scene.loading.magnitude * scene.mesh.lz / M
+        exact = column_settlement(scene.loading.magnitude, scene.mesh.lz, soil.E, soil.nu)
         return "error %", 100 * (records[-1].displacement / exact - 1)
     return "draft lb", records[-1].force
 

@@ -4,11 +4,15 @@ Runs `soilbin study studies/chapter8.toml` (resumable), then reads each case's
 summary.json and curve.csv and prints, or with --readme writes between the
 chapter8 markers:
 - per case: the travel at 36, 72 and 108 lb of draft, the lift at the last
-  step, the McKyes & Ali estimate, Newton iterations and wall time;
+  step, the McKyes & Ali estimate twice (with the c, phi of the modified
+  cap's failure surface at the wedge's stress level, as `soilbin run` writes
+  it, and with the soil's laboratory phi = 33 deg, c = 0 of section VII.5),
+  Newton iterations and wall time;
 - the volume-change table of chapter VIII: the incremental volumetric strain
   (x 10^3, negative in compression) of the soil element in front of the
   embedded 2-in vertical tool with the interface, per 12-lb load step, small
-  against large deformation.
+  against large deformation (read off the curve at 12, 24, ... lb, linear
+  between converged steps where the adaptive steps did not land on one).
 Loads and travel in lb and in; the dissertation's figures 8.2-8.9 are the
 study's figure-8.*.png, figures 8.10-8.12 each case's sections-*.png.
 """
@@ -21,6 +25,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
+from soilbin.run import draft_estimate
+from soilbin.scene import load_scene
+
 ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "chapter8.toml"
 SOILBIN = Path(sys.executable).with_name("soilbin")
@@ -31,13 +41,29 @@ KEYS = ("mesh.configuration", "mesh.tool_width", "mesh.rake_angle", "tool.bonded
 
 
 def cases(folder):
-    """(overrides dict, summary, curve rows) of every case that has a summary."""
+    """(overrides dict, summary, curve rows, scene) of every case that has a summary."""
     for summary_file in sorted(folder.glob("*/summary.json")):
         summary = json.loads(summary_file.read_text())
         values = dict(item.split("=", 1) for item in summary["overrides"])
         with open(summary_file.parent / "curve.csv") as f:
             rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-        yield {k: values[k].strip('"') for k in KEYS}, summary, rows
+        scene = load_scene(summary_file.parent / "scene.toml")
+        yield {k: values[k].strip('"') for k in KEYS}, summary, rows, scene
+
+
+def estimates(scene):
+    """(McKyes & Ali draft with the FE soil's c, phi, the same with the laboratory phi, c)."""
+    try:
+        fe_soil = f"{draft_estimate(scene).draft:.3g}"
+    except NoWedge:
+        fe_soil = "no wedge"
+    lab = dict(ARTIFICIAL_SOIL)
+    if scene.tool.bonded:
+        lab.update(delta=lab["phi"], c_a=lab["c"])
+    mesh = scene.mesh
+    laboratory = narrow_tine_draft(mesh.tool_width, mesh.tool_depth, mesh.rake_angle,
+                                   crescents=2 if mesh.tool_share < 1.0 else 1, **lab)
+    return fe_soil, f"{laboratory.draft:.3g}"
 
 
 def travel_at(rows, load):
@@ -47,39 +73,41 @@ def travel_at(rows, load):
 
 def case_table(results):
     lines = ["| tool | interface | deformation | travel at 36 / 72 / 108 lb [in] | lift at the "
-             "last step [lb] | estimate [lb] | status | Newton | wall (s) |",
+             "last step [lb] | estimate: cap surface / lab φ [lb] | status | Newton | wall (s) |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for values, summary, rows in results:
+    for values, summary, rows, scene in results:
         tool = (f"{values['mesh.tool_width']}-in, {values['mesh.rake_angle']}°, "
                 f"{values['mesh.configuration'].replace('_', ' ')}")
-        estimate = summary.get("draft_estimate")
         lines.append(" | ".join([
             f"| {tool}", "no" if values["tool.bonded"] == "true" else "yes",
             "large" if values["analysis.large_deformation"] == "true" else "small",
             " / ".join(travel_at(rows, load) for load in LOADS),
             f"{rows[-1]['lift']:.3g}" if rows else "–",
-            f"{estimate['draft']:.3g}" if estimate else "–", summary["status"],
+            " / ".join(estimates(scene)), summary["status"],
             str(summary["newton_iterations"]), f"{summary['wall_s']:.0f} |"]))
     return "\n".join(lines)
 
 
 def volume_change_table(results):
     """Increments of the front element's volumetric strain per 12-lb step, x 10^3."""
-    picked = {values["analysis.large_deformation"]: rows for values, _, rows in results
+    picked = {values["analysis.large_deformation"]: rows for values, _, rows, _ in results
               if values["mesh.configuration"] == "embedded" and values["mesh.tool_width"] == "2"
               and values["mesh.rake_angle"] == "90" and values["tool.bonded"] == "false"}
+    loads = 12.0 * np.arange(8)
+    increments = {}
+    for large, rows in picked.items():
+        force = [0.0] + [r["force"] for r in rows]
+        strain = [0.0] + [r["front_volumetric_strain"] for r in rows]
+        reached = loads <= force[-1] * (1.0 + 1e-9)
+        increments[large] = np.where(reached, np.interp(loads, force, strain), np.nan)
     lines = ["| load [lb] | small deformation | large deformation |", "| --- | --- | --- |"]
-    for k in range(7):
-        load = 12.0 * (k + 1)
+    for k in range(1, 8):
         cells = []
         for large in ("false", "true"):
-            rows = picked.get(large, [])
-            if len(rows) > k:
-                before = rows[k - 1]["front_volumetric_strain"] if k else 0.0
-                cells.append(f"{1e3 * (rows[k]['front_volumetric_strain'] - before):.3g}")
-            else:
-                cells.append("–")
-        lines.append(f"| {load:g} | {cells[0]} | {cells[1]} |")
+            strain = increments.get(large)
+            step = np.nan if strain is None else strain[k] - strain[k - 1]
+            cells.append("–" if np.isnan(step) else f"{1e3 * step:.3g}")
+        lines.append(f"| {loads[k]:g} | {cells[0]} | {cells[1]} |")
     return "\n".join(lines)
 
 

@@ -2,19 +2,19 @@
 import numpy as np
 from mpi4py import MPI
 
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from .plotting import pyplot
 
 
 def curve_png(records, scene, path, estimate=None):
     """Force along the loading direction against displacement, one marker per converged step;
     with a closed-form draft ``estimate`` (DraftEstimate), a horizontal reference line."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(5.5, 4))
     ax.plot([0.0] + [r.displacement for r in records], [0.0] + [r.force for r in records], "o-", ms=3)
     if estimate is not None:
         ax.axhline(estimate.draft, color="tab:red", ls="--", lw=1,
-                   label=f"{estimate.model}: {estimate.draft:.3g}")
+                   label=f"{estimate.model} (phi = {estimate.phi:.3g} deg, c = {estimate.c:.3g}): "
+                         f"{estimate.draft:.3g}")
         ax.legend(fontsize=8)
     ax.set_xlabel(f"displacement along {scene.loading.direction.value} [length]")
     ax.set_ylabel(f"force along {scene.loading.direction.value} [force]")
@@ -41,6 +41,7 @@ def tool_section_png(problem, path, depth_fraction=0.5):
     if comm.rank != 0:
         return
     xs, us, ps, gaps = (np.concatenate(parts) for parts in zip(*data))
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     scale = np.abs(us[:, :2]).max()
     arrows = ax.quiver(xs[:, 0], xs[:, 1], us[:, 0], us[:, 1], np.linalg.norm(us[:, :2], axis=1),

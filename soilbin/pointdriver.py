@@ -28,6 +28,7 @@ import numpy as np
 from .errors import ConvergenceError, InputError, ReturnMapError
 from .models import MODELS
 from .params import from_table
+from .plotting import pyplot
 from .paths import PATHS
 from .tensors import IDENTITY, SQRT2, deviator, from_mandel, trace
 from .toml_in import assignment, read_toml, scene_path
@@ -275,10 +276,7 @@ def write_csv(rows, path):
 def plot(rows, path_name, title, path):
     """Three panels: q-p stress path, q (tau in simple shear) against the axial strain
     (gamma), eps_v against the axial strain (gamma; ln p for hydrostatic and oedometer)."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     legs = []   # (name, rows), each leg starting at the last row of the one before
     for row in rows:
         if row["leg"] == "initial":

@@ -6,14 +6,27 @@ import time
 from mpi4py import MPI
 
 from . import figures, figures_3d, interrupt, section_figures
-from .closed_form import narrow_tine_draft
+from .closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
 from .insitu import check_initial_stress
 from .meshes import BUILDERS
 from .outdir import prepare_on_rank0
 from .output import RunFolder
 from .problem import SoilProblem
-from .scene import Headline
+from .scene import COLLAPSE_COMPLIANCE, Headline
 from .solver.stepping import StepperResult, run_load_steps
+
+
+def collapse_pressure(records):
+    """The pressure of the first step whose settlement increment per unit pressure increment
+    is at least COLLAPSE_COMPLIANCE times the first step's, or None."""
+    pressures = [0.0] + [r.columns["pressure"] for r in records]
+    settlements = [0.0] + [r.displacement for r in records]
+    elastic = settlements[1] / pressures[1]
+    for k in range(1, len(pressures)):
+        dp, dw = pressures[k] - pressures[k - 1], settlements[k] - settlements[k - 1]
+        if dw >= COLLAPSE_COMPLIANCE * elastic * dp:
+            return pressures[k]
+    return None
 
 
 def headline_results(scene, records):
@@ -27,25 +40,38 @@ def headline_results(scene, records):
         Headline.FINAL_PRESSURE: lambda: records[-1].columns["pressure"],
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
         Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
+        Headline.COLLAPSE_PRESSURE: lambda: collapse_pressure(records),
     }
-    return {key: read[result.of]() / result.divide_by for key, result in scene.headline.items()}
+    values = {key: read[result.of]() for key, result in scene.headline.items()}
+    return {key: None if value is None else value / scene.headline[key].divide_by
+            for key, value in values.items()}
 
 
 def draft_estimate(scene):
-    """McKyes & Ali draft of the whole tool (a soil_bin scene with gravity and a soil with
-    c, phi), or None: one side crescent against the bin's glass wall, two when embedded.
-    A bonded tool is fully rough: delta = phi, c_a = c."""
+    """McKyes & Ali draft of the whole tool (a soil_bin scene with gravity), or None: one
+    side crescent against the bin's glass wall, two when embedded. The soil's c, phi are
+    its own or, for a cap model, its failure surface's at the passive wedge's stress level
+    (closed_form.equivalent_strength). A bonded tool is fully rough: delta = phi, c_a = c."""
     if scene.mesh_builder != "soil_bin" or scene.tool is None or scene.geostatic is None:
         return None
-    soil = scene.materials[scene.regions["soil"]]
-    if not hasattr(soil, "phi") or not hasattr(soil, "c"):
+    soil, mesh = scene.materials[scene.regions["soil"]], scene.mesh
+    gamma = scene.geostatic.unit_weight
+    if hasattr(soil, "failure"):
+        strength = passive_wedge_strength(soil.failure, gamma, mesh.tool_depth)
+        phi, c, source = strength.phi, strength.c, f"failure surface at I1 = {strength.I1:.3g}"
+    elif hasattr(soil, "phi") and hasattr(soil, "c"):
+        phi, c, source = soil.phi, soil.c, "material"
+    else:
         return None
     interface = scene.tool.interface
-    delta, c_a = (soil.phi, soil.c) if scene.tool.bonded else (interface.delta, interface.c_a)
-    mesh = scene.mesh
-    return narrow_tine_draft(width=mesh.tool_width, depth=mesh.tool_depth, rake=mesh.rake_angle,
-                             phi=soil.phi, delta=delta, gamma=scene.geostatic.unit_weight,
-                             c=soil.c, c_a=c_a, crescents=2 if mesh.tool_share < 1.0 else 1)
+    delta, c_a = (phi, c) if scene.tool.bonded else (interface.delta, interface.c_a)
+    try:
+        return narrow_tine_draft(width=mesh.tool_width, depth=mesh.tool_depth, rake=mesh.rake_angle,
+                                 phi=phi, delta=delta, gamma=gamma, c=c, c_a=c_a,
+                                 crescents=2 if mesh.tool_share < 1.0 else 1, strength=source)
+    except NoWedge as err:
+        raise NoWedge(f"no {MODEL} estimate: {err} (phi = {phi:.3g} from the {source}, "
+                      f"delta = {delta:.3g})") from None
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
@@ -110,7 +136,12 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "wall_s": round(time.perf_counter() - start, 3),
         **headline_results(scene, records),
     }
-    estimate = draft_estimate(scene)
+    try:
+        estimate = draft_estimate(scene)
+    except NoWedge as err:
+        estimate = None
+        if comm.rank == 0:
+            print(f"soilbin: note: {err}", file=sys.stderr)
     if estimate is not None:
         summary["draft_estimate"] = dataclasses.asdict(estimate)
     if interrupted is not None:

@@ -66,12 +66,23 @@ class Headline(enum.Enum):
 
     Displacement and force are measured along the loading direction, so
     settlement and compressive pressure are positive (geomechanics signs).
+    ``collapse_pressure`` is the pressure of the first step whose settlement
+    increment per unit pressure increment is at least ``COLLAPSE_COMPLIANCE``
+    times the first step's (the elastic compliance): where the settlement per
+    step blows up (or the first step at which the pressure falls). It does not depend on how far Newton gets past that point
+    (in large deformation the geometry keeps the curve rising slowly and the
+    last converged load does), and is none if no step gets there.
     """
     FINAL_DISPLACEMENT = "final_displacement"
     FINAL_PRESSURE = "final_pressure"
     PEAK_PRESSURE = "peak_pressure"
+    COLLAPSE_PRESSURE = "collapse_pressure"
     FINAL_FORCE = "final_force"
     PEAK_FORCE = "peak_force"
+
+
+#: Settlement per unit pressure, relative to the elastic one, that marks the collapse.
+COLLAPSE_COMPLIANCE = 100.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -152,14 +163,13 @@ class Analysis(Params):
                                                "(geometric stiffness, moving mesh)")
     frame_rotation: tuple[float, ...] = param(
         (0.0, 0.0, 0.0), doc="rotation vector [degrees] turning the whole scene (mesh, supports, "
-                             "loads): results along the loading direction must not change")
+                             "rollers, plane strain, loads, gravity): results along the loading "
+                             "direction must not change")
 
     def __post_init__(self):
         super().__post_init__()
         if len(self.frame_rotation) != 3:
             raise InputError(f"frame_rotation = {list(self.frame_rotation)!r}: expected 3 numbers")
-        if any(self.frame_rotation) and self.plane_strain:
-            raise InputError("frame_rotation: a rotated frame cannot be plane strain in y")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -354,11 +364,11 @@ def _parse(raw, path):
         spec = value if isinstance(value, dict) else {"of": value}
         headline[key] = from_table(HeadlineResult, spec, f"headline.{key}")
 
+    if tool is not None and any(analysis.frame_rotation):
+        raise InputError("analysis.frame_rotation: a scene with a tool cannot be rotated (the "
+                         "tool's interface works in world components)")
     geostatic = None
     if "geostatic" in raw:
-        if any(analysis.frame_rotation):
-            raise InputError("geostatic: gravity acts along -z; it cannot be combined with "
-                             "analysis.frame_rotation")
         geostatic = read_geostatic(raw["geostatic"], {m: materials[m] for m in regions.values()})
     output = from_table(Output, raw.get("output", {}), "output")
     for i, value in enumerate(output.at):

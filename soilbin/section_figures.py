@@ -10,9 +10,7 @@ to rank 0, which draws.
 import numpy as np
 from mpi4py import MPI
 
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from .plotting import pyplot
 
 
 def _node_plane(coordinates, target, comm):
@@ -58,6 +56,7 @@ def _draw(panels, low, high, scene, load, path):
     size = high - low
     reach = 1.5 * max(size.max(), 1e-12)   # the tool depth or width, whichever larger
     scale = max(np.abs(p[5]).max(initial=0.0) for p in panels) or 1.0
+    plt = pyplot()
     fig, axs = plt.subplots(3, 1, figsize=(7, 12))
     for ax, (title, normal, plane, axes, xs, us, tool) in zip(axs, panels):
         a, b = axes

@@ -104,7 +104,8 @@ class Study:
 @dataclasses.dataclass(frozen=True)
 class Outcome:
     case: Case
-    status: str        # complete, collapse, failed (its summary's), error (it left no summary)
+    status: str        # complete, collapse, failed (its summary's), error (it left no summary),
+                       # unfinished (the study was stopped before it ended)
     summary: dict      # None for an error
     ran: bool          # False: found in its folder, from an earlier run
 
@@ -398,6 +399,19 @@ def run_study(study, out, retry_failed=False, report=_report):
     return [outcomes[case.name] for case in study.cases]
 
 
+def collected(study, out):
+    """Every case's outcome as its folder holds it now; "unfinished" where it has no summary
+    of its own (not run, or stopped)."""
+    outcomes = []
+    for case in study.cases:
+        summary = earlier_summary(case, out / case.name)
+        if summary is None or summary["status"] == "interrupted":
+            outcomes.append(Outcome(case, "unfinished", None, ran=False))
+        else:
+            outcomes.append(Outcome(case, summary["status"], summary, ran=False))
+    return outcomes
+
+
 def _finished(case, folder):
     summary = earlier_summary(case, folder)
     return Outcome(case, summary["status"] if summary else "error", summary, ran=True)
@@ -488,7 +502,8 @@ sets, e.g. E=4500,magnitude=50. Every summary.json lists the case's
 table.md and the figures. Run it again to resume: a case whose folder holds
 the summary of a run of the same overrides and the same resolved scene is not
 run again (a failed one neither, unless --retry-failed); an interrupted one
-runs from the start. SIGINT/SIGTERM stop the running cases.
+runs from the start. SIGINT/SIGTERM stop the running cases and
+write the table and figures of the finished ones.
 
 exit status: 0 every case complete (or collapse), 1 some case failed or
 ended in error, 2 bad input, 128 + signal number when interrupted.
@@ -542,8 +557,11 @@ def study_command(args):
     try:
         outcomes = run_study(study, out, args.retry_failed)
     except Interrupted as stop:
-        _report(f"soilbin: study interrupted by {stop}; completed cases stay in {out}, "
-                f"run it again to resume")
+        outcomes = collected(study, out)
+        write_table(study, outcomes, out)
+        draw_figures(study, outcomes, out)
+        _report(f"soilbin: study interrupted by {stop}; completed cases stay in {out} (table "
+                f"and figures of those written), run it again to resume")
         return 128 + stop.signum
     write_table(study, outcomes, out)
     draw_figures(study, outcomes, out)

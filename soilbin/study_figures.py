@@ -1,14 +1,12 @@
 """Overlay figures of a study: the cases' curves, or a summary value against a swept key."""
 import csv
 
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from .study import DONE, label  # noqa: E402
+from .plotting import pyplot
+from .study import DONE, label
 
 
 def _axes(figure, study, xlabel, ylabel):
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.2))
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
@@ -22,7 +20,7 @@ def _save(fig, ax, path):
         ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
+    pyplot().close(fig)
 
 
 def curves_png(figure, outcomes, study, out):

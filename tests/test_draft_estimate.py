@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from soilbin.closed_form import MODEL, chapter_viii_cases, chapter_viii_table, narrow_tine_draft
+from soilbin.closed_form import MODEL, NoWedge, chapter_viii_cases, chapter_viii_table, narrow_tine_draft
 
 rad = math.radians
 ROOT = Path(__file__).resolve().parent.parent
@@ -149,7 +149,12 @@ def test_each_tool_scene_gets_the_estimate_of_the_whole_tool():
     bonded = draft_estimate(load_scene(scene, dp + ["tool.bonded=true"]))
     assert bonded == narrow_tine_draft(2.0, 6.0, 90.0, phi=33.0, delta=33.0, gamma=0.072, c=0.05,
                                        c_a=0.05, crescents=1)
-    assert draft_estimate(load_scene(scene)) is None   # the cap soil has no c, phi
+    cap = draft_estimate(load_scene(scene))      # the modified cap: its failure surface's c, phi
+    assert cap == narrow_tine_draft(2.0, 6.0, 90.0, phi=cap.phi, delta=22.0, gamma=0.072, c=cap.c,
+                                    crescents=1, strength=cap.strength)
+    assert 45.0 < cap.phi < 55.0 and cap.strength.startswith("failure surface at I1")
+    with pytest.raises(NoWedge, match="phi = 50.6 from the failure surface"):
+        draft_estimate(load_scene(scene, ["tool.bonded=true"]))    # 90 + 2 phi > 180 degrees
     assert draft_estimate(load_scene(ROOT / "scenes" / "column-elastic.toml")) is None
 
 
@@ -163,3 +168,43 @@ def test_draft_figure_draws_the_estimate(tmp_path):
     estimate = narrow_tine_draft(2.0, 6.0, 90.0, 33.0, 22.0, 0.072, crescents=1)
     figures.curve_png(records, scene, tmp_path / "curve.png", estimate)
     assert (tmp_path / "curve.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("phi, c", [(20.0, 0.0), (33.0, 0.05), (45.0, 1.0)])
+def test_compression_cone_inverts_back_to_mohr_coulomb(phi, c):
+    from soilbin.closed_form import mohr_coulomb_of_compression_cone
+    from soilbin.models.matching import Matching
+    alpha, k = Matching.COMPRESSION_CONE.coefficients(c, phi)
+    assert mohr_coulomb_of_compression_cone(alpha, k) == pytest.approx((phi, c), rel=1e-12, abs=1e-14)
+    with pytest.raises(ValueError, match="alpha"):
+        mohr_coulomb_of_compression_cone(0.6, k)       # steeper than any Mohr–Coulomb meridian
+
+
+def test_straight_failure_surface_keeps_its_own_strength():
+    """A Drucker–Prager cone written as F(I1) = k + alpha I1 is its own tangent at any depth."""
+    from soilbin.closed_form import passive_wedge_strength
+    from soilbin.models.matching import Matching
+    alpha, k = Matching.COMPRESSION_CONE.coefficients(0.05, 33.0)
+    for depth in (2.0, 6.0, 20.0):
+        s = passive_wedge_strength(lambda I1: (k + alpha * I1, alpha), 0.072, depth)
+        assert (s.phi, s.c) == pytest.approx((33.0, 0.05), rel=1e-12)
+
+
+@pytest.mark.parametrize("B", [0.0, 0.11])   # DiMaggio–Sandler and the modified cap, VII.5
+def test_curved_failure_surface_is_linearised_at_the_passive_state(B):
+    """The returned envelope touches sqrt(J2) = A + B I1 - C exp(-beta I1) at I1*, and I1* is
+    the Rankine passive state's first invariant at mid-depth, 3/2 (1 + Kp) gamma d/2."""
+    from soilbin.closed_form import passive_wedge_strength
+    from soilbin.models.matching import Matching
+
+    def failure(I1):
+        e = 5.6 * math.exp(-0.062 * I1)
+        return 5.6 + B * I1 - e, B + 0.062 * e
+
+    s = passive_wedge_strength(failure, 0.072, 6.0)
+    kp = math.tan(rad(45.0 + s.phi / 2.0)) ** 2
+    assert s.I1 == pytest.approx(1.5 * (1.0 + kp) * 0.072 * 3.0, rel=1e-10)
+    alpha, k = Matching.COMPRESSION_CONE.coefficients(s.c, s.phi)
+    F, dF = failure(s.I1)
+    assert (alpha, k + alpha * s.I1) == pytest.approx((dF, F), rel=1e-10)
+    assert s.c >= 0.0 and 30.0 < s.phi < 60.0      # steep at low confinement (A = C: no c at I1 = 0)

@@ -3,7 +3,6 @@ import numpy as np
 import pytest
 
 from conftest import make_problem
-from soilbin.errors import InputError
 
 LAYER = """
 title = "a soil layer under its own weight"
@@ -68,10 +67,3 @@ def test_initial_stress_is_in_equilibrium(tmp_path, element):
     u = problem.w.x.array if element == "hex8" else problem.w.sub(0).collapse().x.array
     settlement_scale = 0.064 * 10.0**2 / 7000.0     # γ H² / E
     assert np.abs(u).max() < 1e-10 * settlement_scale
-
-
-def test_gravity_does_not_combine_with_a_rotated_frame(tmp_path):
-    scene = tmp_path / "layer.toml"
-    scene.write_text(LAYER)
-    with pytest.raises(InputError, match="frame_rotation"):
-        make_problem(scene, "analysis.frame_rotation=[0.0, 10.0, 0.0]")

@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from soilbin.solver.stepping import run_load_steps
+from soilbin.run import collapse_pressure
+from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix
 from conftest import make_problem
 
@@ -185,12 +186,33 @@ def test_simple_shear_follows_the_jaumann_closed_form(tmp_path):
 
 
 def test_block_collapse_and_strip_load_collapse_in_large_deformation(solve):
-    """VII.2 and VII.4 (flexible strip load) keep their small-deformation tolerances."""
+    """VII.2 and VII.4 (flexible strip load): the strip's collapse pressure is where its
+    settlement per step reaches 100 times the elastic one (+0.893% measured)."""
     block, _ = solve("block-drucker-prager", "analysis.large_deformation=true")
     assert block["collapse_stress"] == pytest.approx(1732.05, rel=0.01)
-    strip, _ = solve("strip-load-von-mises", "analysis.large_deformation=true", "output.fields=[]")
+    strip, out = solve("strip-load-von-mises", "analysis.large_deformation=true", "output.fields=[]")
     assert strip["status"] == "collapse"
-    assert strip["collapse_pressure"] == pytest.approx((2 + math.pi) * 17.5, rel=0.03)
+    assert strip["collapse_pressure"] == pytest.approx((2 + math.pi) * 17.5, rel=0.015)
+    rows = read_curve(out)
+    k = min(range(len(rows)), key=lambda i: abs(rows[i]["pressure"] - strip["collapse_pressure"]))
+    elastic = rows[0]["displacement"] / rows[0]["pressure"]
+    compliance = [(b["displacement"] - a["displacement"]) / (b["pressure"] - a["pressure"]) / elastic
+                  for a, b in zip(rows, rows[1:])]
+    assert compliance[k - 1] >= 100.0 > max(compliance[:k - 1])
+
+
+def record(pressure, settlement):
+    return StepRecord(0, 0.0, settlement, pressure, 1, 0, 0, 0.0, (), {"pressure": pressure})
+
+
+def test_collapse_pressure_is_where_the_settlement_per_step_blows_up():
+    """Settlement per unit pressure 1e-4 (elastic), then 5e-3 (50x), then 2e-2 (200x): the
+    collapse is the third step, whatever comes after; none before it; a falling pressure too."""
+    curve = [record(10.0, 1e-3), record(20.0, 0.051), record(20.5, 0.061)]
+    assert collapse_pressure(curve) == 20.5
+    assert collapse_pressure(curve + [record(20.6, 0.062)]) == 20.5
+    assert collapse_pressure(curve[:2]) is None
+    assert collapse_pressure(curve[:2] + [record(19.0, 0.052)]) == 19.0
 
 
 ROUGH_PLATENS = """
@@ -245,3 +267,34 @@ def test_a_rotated_frame_gives_the_same_curve(solve, tmp_path, large):
         assert b["displacement"] == pytest.approx(a["displacement"], rel=1e-6)
         assert b["force"] == pytest.approx(a["force"], rel=1e-6)
     assert curves[0][-1]["pressure"] > 1000.0   # well into the plastic range
+
+
+def test_corner_squares_keep_their_size_whatever_the_refinement():
+    """The 6 x 3 squares of side corner_size at the footing edge (x = 1, z = 0)."""
+    from mpi4py import MPI
+    from soilbin.meshes import BUILDERS, StripFootingParams
+    for refine in (1, 2):
+        tm = BUILDERS["strip_footing"].build(StripFootingParams(corner_size=0.05, refine=refine),
+                                             MPI.COMM_WORLD)
+        x = tm.mesh.geometry.x
+        nodes = tm.mesh.geometry.dofmap.array.reshape(-1, 8)
+        low, high = x[nodes].min(axis=1), x[nodes].max(axis=1)
+        inside = (low[:, 0] > 0.85 - 1e-9) & (high[:, 0] < 1.15 + 1e-9) & (low[:, 2] > -0.15 - 1e-9)
+        assert inside.sum() == 18
+        assert np.allclose(high[inside][:, [0, 2]] - low[inside][:, [0, 2]], 0.05)
+
+
+def test_rigid_rough_footing_reaches_its_full_settlement(solve):
+    """VII.4 footing in large deformation with squares of w/2 at its edge: to w = 0.1 in
+    (10% of the half-width) without failing or folding (no drop in the pressure);
+    +7.0% above (2 + π)c at the end (+3.0% in small deformation on this mesh)."""
+    summary, out = solve("strip-footing-von-mises", "analysis.large_deformation=true",
+                         "mesh.corner_size=0.05", "output.fields=[]")
+    assert summary["status"] == "complete"
+    rows = read_curve(out)
+    assert rows[-1]["displacement"] == pytest.approx(0.1)
+    limit = (2 + math.pi) * 17.5
+    pressures = [row["pressure"] for row in rows]
+    assert limit < pressures[-1] < 1.1 * limit
+    peak = pressures.index(max(pressures))
+    assert min(pressures[peak:]) > 0.98 * max(pressures)

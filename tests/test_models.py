@@ -8,6 +8,7 @@ import pytest
 
 from conftest import central_differences
 
+from soilbin.closed_form.verification import unconfined_strength
 from soilbin.errors import InputError, ReturnMapError
 from soilbin.models import MODELS, DruckerPrager, LinearElastic, Matching, VonMises
 from soilbin.params import from_table
@@ -135,7 +136,7 @@ def drive(model, eps_axial, axial, free, fixed=()):
 
 
 def test_uniaxial_compression_compression_cone_collapses_at_unconfined_strength():
-    strength = 2 * C_MC * math.cos(math.radians(PHI)) / (1 - math.sin(math.radians(PHI)))
+    strength = unconfined_strength(C_MC, PHI)
     assert strength == pytest.approx(1732.0508, abs=1e-4)
     eps = -np.linspace(0.1, 3.0, 30) * strength / E
     sigma, state = drive(DP, eps, axial=2, free=(0, 1))
@@ -149,7 +150,7 @@ def test_plane_strain_matching_gives_mohr_coulomb_collapse_in_plane_strain():
     # Unconfined plane-strain compression: sigma_11 = 0, eps_33 = 0. Once the
     # stress stops changing the plastic flow is plane, and the plane-strain
     # cone reproduces the Mohr–Coulomb strength 2c cos(phi) / (1 - sin(phi)).
-    strength = 2 * C_MC * math.cos(math.radians(PHI)) / (1 - math.sin(math.radians(PHI)))
+    strength = unconfined_strength(C_MC, PHI)
     eps = -np.geomspace(0.1, 30.0, 30) * strength / E
     sigma, _ = drive(DP_PLANE, eps, axial=1, free=(0,))
     assert sigma[-1] == pytest.approx(-strength, rel=1e-10)

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from soilbin.cli import main
+from soilbin.closed_form.verification import column_settlement
 from soilbin.study import SUMMARY_KEYS, _earlier, _short_names, folder_name, load_study
 from conftest import ROOT
 
@@ -33,8 +34,8 @@ name = "curves"
 
 
 def settlement(E, nu=0.2, p=100.0, L=10.0):
-    """w = pL/M of the constrained column (eq. 7.1), M the constrained modulus."""
-    return p * L * (1 + nu) * (1 - 2 * nu) / (E * (1 - nu))
+    """w = pL/M of the constrained column (eq. 7.1) of the study's scene."""
+    return column_settlement(p, L, E, nu)
 
 
 def study_file(tmp_path, text, name="study.toml"):
@@ -172,7 +173,9 @@ def test_study_runs_resumes_after_a_kill_and_writes_its_table(tmp_path):
     assert "interrupted by SIGTERM" in err
     assert (first / "summary.json").exists() and not (second / "summary.json").exists()
     assert _processes_writing(second) == []    # the running case was stopped with the study
-    assert not (out / "table.csv").exists()
+    table = (out / "table.md").read_text()   # what is done so far, the rest unfinished
+    assert "1 of 2 cases complete" in table and "| 9000 | unfinished |" in table
+    assert (out / "curves.png").exists()
     done_at = (first / "summary.json").stat().st_mtime_ns
 
     # run again: the first case stands, the second runs

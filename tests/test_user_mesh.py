@@ -1,12 +1,12 @@
 """User meshes: builder = "gmsh" reads a .msh file; its named physical groups are the
 scene's regions and boundaries, checked when the scene is read."""
-import math
 import subprocess
 import sys
 
 import gmsh
 import pytest
 
+from soilbin.closed_form.verification import unconfined_strength
 from soilbin.errors import InputError
 from soilbin.scene import load_scene
 from conftest import ROOT, SCENES
@@ -44,10 +44,8 @@ def test_a_user_mesh_block_collapses_at_the_mohr_coulomb_stress(tmp_path, user_m
     scene = load_scene(scene_file(tmp_path, user_mesh.name))   # relative to the scene's folder
     assert scene.mesh.file == str(user_mesh_copy)
     summary = run_scene(scene, tmp_path / "run")
-    c, phi = 500.0, math.radians(30.0)
     assert summary["n_cells"] == 8
-    assert summary["collapse_stress"] == pytest.approx(2 * c * math.cos(phi) / (1 - math.sin(phi)),
-                                                       rel=1e-6)
+    assert summary["collapse_stress"] == pytest.approx(unconfined_strength(500.0, 30.0), rel=1e-6)
     assert f'file = "{user_mesh_copy}"' in (tmp_path / "run" / "scene.toml").read_text()
 
 

@@ -4,9 +4,8 @@ import math
 
 import pytest
 
-
-def constrained_modulus(E, nu):
-    return E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+from soilbin.closed_form.verification import (column_settlement, prandtl_limit_pressure,
+                                              unconfined_strength)
 
 
 @pytest.mark.parametrize("E, nu, p", [(9000.0, 0.2, 100.0), (2.5e4, 0.45, 7.0), (1.0, -0.3, 1e-3)])
@@ -16,14 +15,13 @@ def test_column_settles_pL_over_M(solve, E, nu, p):
                        f"loading.magnitude={p}")
     L = 10.0   # the scene's column height, mesh.lz
     assert summary["pressure"] == pytest.approx(p, rel=1e-10)
-    assert summary["top_settlement"] == pytest.approx(p * L / constrained_modulus(E, nu), rel=1e-8)
+    assert summary["top_settlement"] == pytest.approx(column_settlement(p, L, E, nu), rel=1e-8)
 
 
 @pytest.mark.parametrize("c, phi", [(500.0, 30.0), (100.0, 10.0), (20.0, 45.0)])
 def test_block_collapses_at_mohr_coulomb_uniaxial_strength(solve, c, phi):
     """VII.2, eq. 7.7: the compression cone gives 2c cos(phi)/(1 - sin(phi)) (1732 psf)."""
-    s = math.sin(math.radians(phi))
-    strength = 2 * c * math.cos(math.radians(phi)) / (1 - s)
+    strength = unconfined_strength(c, phi)
     # displace to three times the yield settlement whatever the strength
     settle = 3 * strength / 500000.0
     summary, _ = solve("block-drucker-prager", f"materials.soil.c={c}", f"materials.soil.phi={phi}",
@@ -37,7 +35,7 @@ def test_rigid_footing_limit_pressure_prandtl(solve, c, E):
     """VII.4: the rigid footing's limit pressure within 3% of (2 + pi) c (default mesh)."""
     summary, out = solve("strip-footing-von-mises", f"materials.clay.c={c}", f"materials.clay.E={E}")
     assert summary["status"] == "complete"
-    assert summary["limit_pressure"] == pytest.approx((2 + math.pi) * c, rel=0.03)
+    assert summary["limit_pressure"] == pytest.approx(prandtl_limit_pressure(c), rel=0.03)
     # the curve reached its plateau: the last two steps carry the same load to 0.1%
     with open(out / "curve.csv") as f:
         pressure = [float(row["pressure"]) for row in csv.DictReader(f)]
@@ -47,14 +45,14 @@ def test_rigid_footing_limit_pressure_prandtl(solve, c, E):
 def test_plain_trilinear_bricks_lock(solve):
     """Why the footing scene uses hex8-bbar: plain hex8 overestimates the limit by > 5%."""
     summary, _ = solve("strip-footing-von-mises", "analysis.element=hex8")
-    assert summary["limit_pressure"] > 1.05 * (2 + math.pi) * 17.5
+    assert summary["limit_pressure"] > 1.05 * prandtl_limit_pressure(17.5)
 
 
 def test_flexible_strip_load_collapses_near_prandtl(solve):
     """VII.4 under force control: the last converged load brackets the collapse load."""
     summary, out = solve("strip-load-von-mises")
     assert summary["status"] == "collapse" and summary["converged"]
-    assert summary["collapse_pressure"] == pytest.approx((2 + math.pi) * 17.5, rel=0.03)
+    assert summary["collapse_pressure"] == pytest.approx(prandtl_limit_pressure(17.5), rel=0.03)
     with open(out / "curve.csv") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == summary["n_steps"]

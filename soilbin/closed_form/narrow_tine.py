@@ -54,6 +54,10 @@ import numpy as np
 MODEL = "McKyes & Ali (1977) narrow blade"
 
 
+class NoWedge(ValueError):
+    """rake + delta + phi >= 180 degrees: no rupture plane closes a wedge (F is unbounded)."""
+
+
 @dataclass(frozen=True)
 class DraftEstimate:
     """Forces on the tool at soil failure, in the units of the inputs."""
@@ -63,6 +67,9 @@ class DraftEstimate:
     rupture_distance: float  # r: how far the failure reaches ahead of the blade's top edge
     crescent_extent: float   # r': how far each side crescent reaches beyond the blade's side
     crescents: int
+    phi: float               # the soil's friction angle [degrees] and cohesion used
+    c: float
+    strength: str = "material"   # where phi, c came from
     model: str = MODEL
 
 
@@ -84,11 +91,12 @@ def _force(beta, alpha, delta, phi, depth, width, gamma, c, c_a, q, crescents):
 
 
 def narrow_tine_draft(width, depth, rake, phi, delta, gamma, c=0.0, c_a=0.0, q=0.0,
-                      crescents=2) -> DraftEstimate:
+                      crescents=2, strength="material") -> DraftEstimate:
     """McKyes & Ali draft of a blade ``width`` wide, its tip ``depth`` deep, raked at
     ``rake`` degrees from the horizontal (90 = vertical); soil friction ``phi`` and
     soil-tool friction ``delta`` in degrees, unit weight ``gamma``, cohesion ``c``,
-    adhesion ``c_a``, surcharge ``q``; ``crescents`` side crescents (2, 1 or 0)."""
+    adhesion ``c_a``, surcharge ``q``; ``crescents`` side crescents (2, 1 or 0);
+    ``strength`` says where phi and c came from (recorded, not used)."""
     if crescents not in (0, 1, 2):
         raise ValueError(f"crescents = {crescents!r}: 2 (open soil), 1 (against a wall) or 0 (plane)")
     if not 0.0 < rake <= 90.0:
@@ -97,7 +105,7 @@ def narrow_tine_draft(width, depth, rake, phi, delta, gamma, c=0.0, c_a=0.0, q=0
     args = (alpha, dl, ph, depth, width, gamma, c, c_a, q, crescents)
     upper = math.pi - alpha - dl - ph                                  # (7): E > 0
     if upper <= 0.0:
-        raise ValueError("rake + delta + phi >= 180 degrees: no wedge can form")
+        raise NoWedge(f"rake + delta + phi = {rake + delta + phi:.4g} >= 180 degrees: no wedge can form")
     # (7): the least F over beta, bracketed on a grid, then golden-section search.
     grid = np.linspace(0.0, min(upper, 0.5 * math.pi), 2002)[1:-1]
     k = int(np.argmin(_force(grid, *args)[0]))
@@ -115,7 +123,7 @@ def narrow_tine_draft(width, depth, rake, phi, delta, gamma, c=0.0, c_a=0.0, q=0
         draft=force * math.sin(alpha + dl) + c_a * depth * width / math.tan(alpha),   # (6)
         vertical=force * math.cos(alpha + dl) - c_a * depth * width,                  # (6)
         rupture_angle=math.degrees(beta), rupture_distance=r, crescent_extent=r_side,
-        crescents=crescents)
+        crescents=crescents, phi=phi, c=c, strength=strength)
 
 
 # Section VII.5 artificial soil (lb, in): phi = 33 degrees, c = 0, gamma = 0.072 pci.

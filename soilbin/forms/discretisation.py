@@ -7,8 +7,15 @@ P0 fields on trilinear bricks this is exactly the B-bar / mean-dilatation
 brick of Nagtegaal, Parks & Rice (1974); on triquadratic bricks the P1-disc
 pair gives the LBB-stable Q2/P1 element. θ and p are cell-local, so they add
 only cell-interior unknowns to the direct solve.
+
+In a rotated frame (``problem.frame``) the displacement dofs are components
+along the scene's own axes, the columns of ``basis`` in the world: the forms
+see u = basis · u_dofs, and every support or roller holds a dof.
 """
 import dataclasses
+from typing import Optional
+
+import numpy as np
 
 import ufl
 from dolfinx import fem
@@ -21,21 +28,22 @@ class Discretisation:
     element: Element
     space: fem.FunctionSpace          # the unknown's space (mixed or vector)
     displacement_space: fem.FunctionSpace  # view of the displacement block
+    basis: Optional[tuple] = None     # the dofs' axes in the world (columns), None: the world's
 
     @classmethod
-    def create(cls, mesh, element):
+    def create(cls, mesh, element, basis=None):
         cell = mesh.ufl_cell()
         if cell.cellname() != CELL:
             raise ValueError(f"{element.value} needs a mesh of {CELL} cells, not {cell.cellname()}")
         ve = ufl.VectorElement("Lagrange", cell, element.degree)
         if not element.mixed:
             space = fem.FunctionSpace(mesh, ve)
-            return cls(element, space, space)
+            return cls(element, space, space, basis)
         # P0 with trilinear, P1-disc (family "DPC") with triquadratic bricks
         pe = (ufl.FiniteElement("DG", cell, 0) if element.degree == 1
               else ufl.FiniteElement("DPC", cell, 1))
         space = fem.FunctionSpace(mesh, ufl.MixedElement([ve, pe, pe]))
-        return cls(element, space, space.sub(0))
+        return cls(element, space, space.sub(0), basis)
 
     @property
     def mesh(self):
@@ -54,5 +62,15 @@ class Discretisation:
                            metadata={"quadrature_degree": self.element.quadrature_degree})
 
     def displacement(self, w):
-        """Displacement part of a function, trial or test function of ``space``."""
-        return ufl.split(w)[0] if self.element.mixed else w
+        """Displacement part (world components) of a function, trial or test function of
+        ``space``."""
+        u = ufl.split(w)[0] if self.element.mixed else w
+        return u if self.basis is None else ufl.dot(ufl.as_matrix(self.basis), u)
+
+    def to_world(self, values):
+        """Nodal displacement dofs (n, 3) as world components."""
+        return values if self.basis is None else values @ np.array(self.basis).T
+
+    def in_dof_axes(self, points):
+        """World points (n, 3) in the dofs' axes (rigid-body modes are built on these)."""
+        return points if self.basis is None else points @ np.array(self.basis)

@@ -22,16 +22,17 @@ def strain(u):
 
 def enhanced_strain(disc, w):
     """ε̄ of a (mixed) function: the strain the constitutive law sees."""
+    u = disc.displacement(w)
     if not disc.element.mixed:
-        return strain(w)
-    u, theta, _ = ufl.split(w)
-    return ufl.dev(strain(u)) + theta / 3.0 * ufl.Identity(3)
+        return strain(u)
+    return ufl.dev(strain(u)) + ufl.split(w)[1] / 3.0 * ufl.Identity(3)
 
 
 def _constraint(disc, w, w_hat):
     """∫ p̂ (div v − ψ) + ∫ q (div u − θ) with (v, ψ, q) from w_hat."""
-    u, theta, p = ufl.split(w)
-    v, psi, q = ufl.split(w_hat)
+    _, theta, p = ufl.split(w)
+    _, psi, q = ufl.split(w_hat)
+    u, v = disc.displacement(w), disc.displacement(w_hat)
     return (p * (ufl.div(v) - psi) + q * (ufl.div(u) - theta)) * disc.measure()
 
 

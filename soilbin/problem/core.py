@@ -30,7 +30,7 @@ class SoilProblem:
         self.comm = mesh.comm
         self.frame = frame = Frame(scene.analysis.frame_rotation)
         frame.turn_mesh(mesh)
-        self.disc = disc = Discretisation.create(mesh, scene.analysis.element)
+        self.disc = disc = Discretisation.create(mesh, scene.analysis.element, frame.basis)
         self.w = fem.Function(disc.space, name="solution")
         self.w_committed = fem.Function(disc.space)
         self.kinematics = kinematics_of(scene.analysis, disc, self.w, self.w_committed)
@@ -39,7 +39,7 @@ class SoilProblem:
             start_mean_pressure(disc, self.points, self.w, self.w_committed)
 
         v = ufl.TestFunction(disc.space)
-        self.supports = Supports(scene, tagged_mesh, disc, frame)
+        self.supports = Supports(scene, tagged_mesh, disc)
         self.tool = (RigidTool(scene, tagged_mesh, disc, self.kinematics,
                                frame.vector(scene.loading.direction), self.w, self.supports)
                      if scene.tool is not None else None)
@@ -58,7 +58,7 @@ class SoilProblem:
         return MaterialPoints(self.disc, self.w, self.w_committed,
                               self.kinematics.strain_increment(), region_cells, models,
                               keep_strain=self.kinematics.keeps_strain,
-                              initial_stress=geostatic and geostatic.stress)
+                              initial_stress=geostatic and self.frame.stress_field(geostatic.stress))
 
     def _newton(self, v):
         """Residual = internal − dead loads − the driven traction (+ the tool's nodal terms)."""

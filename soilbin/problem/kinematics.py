@@ -65,6 +65,8 @@ class SmallStrain:
             self._p1 = fem.Function(fem.VectorFunctionSpace(self._disc.mesh, ("Lagrange", 1)),
                                     name="displacement")
         self._p1.interpolate(self._w.sub(0).collapse() if self._disc.element.mixed else self._w)
+        values = self._p1.x.array.reshape(-1, 3)
+        values[:] = self._disc.to_world(values)
         return self._p1
 
 
@@ -155,6 +157,7 @@ class MeshMotion:
         source = self._w.sub(0).collapse() if self._disc.element.mixed else self._w
         self._increment.interpolate(source)
         du = self._increment.x.array.reshape(-1, 3)
+        du[:] = self._disc.to_world(du)
         self._x[self._nodes, :3] = self._x[self._nodes, :3] + du[self._dofs]
         self.total.x.array[:] += self._increment.x.array
         self._w.x.array[self._reset] = 0.0

@@ -18,7 +18,6 @@ from petsc4py import PETSc
 from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401
 
-from ..errors import InputError
 from ..scene import TOOL, Control
 from ..solver.stepping import Observation
 from ..tensors import ufl_from_mandel
@@ -29,9 +28,9 @@ def facets(tagged, name):
 
 
 def probe(disc, tagged, boundaries, vector, held):
-    """A function of the unknown's space equal to ``vector`` on the displacement dofs of the
-    named boundaries, except the dofs ``held`` by supports, and zero elsewhere: the virtual
-    displacement that reads a resultant."""
+    """A function of the unknown's space equal to ``vector`` (dof components: the scene's
+    axes) on the displacement dofs of the named boundaries, except the dofs ``held`` by
+    supports, and zero elsewhere: the virtual displacement that reads a resultant."""
     V, tdim = disc.displacement_space, disc.mesh.topology.dim
     field = fem.Function(disc.space)
     for i in np.flatnonzero(vector):
@@ -51,24 +50,19 @@ def traction(disc, kinematics, magnitude, vector, measure, v):
 
 class Supports:
     """Dirichlet conditions: supports, plane strain, and under displacement control the driven
-    boundary, whose prescribed values :meth:`move` sets. Components are the scene's own axes;
-    in a rotated frame a boundary must be held in all three. Where the driven boundary meets a
-    support, the dofs the support holds stay held: the driven boundary moves its other dofs."""
+    boundary, whose prescribed values :meth:`move` sets. Components are the scene's own axes,
+    which are those of the displacement dofs also in a rotated frame (``disc.basis``). Where
+    the driven boundary meets a support, the dofs the support holds stay held: the driven
+    boundary moves its other dofs."""
 
-    def __init__(self, scene, tagged, disc, frame):
+    def __init__(self, scene, tagged, disc):
         mesh, V = disc.mesh, disc.displacement_space
         tdim = mesh.topology.dim
         self._moving = []   # (Constant, coefficient of the prescribed displacement)
         self.bcs = []
         located = []        # (dofs, component, coefficient)
         for boundary, axes in self._constraints(scene).items():
-            if len(axes) < 3 and frame.rotated:
-                raise InputError(f"analysis.frame_rotation: boundary {boundary!r} must be held in "
-                                 f"all of x, y, z in a rotated frame (it holds {len(axes)})")
-            local = np.array([axes.get(a, 0.0) for a in range(3)])
-            components = range(3) if len(axes) == 3 else axes
-            for i in components:
-                coefficient = frame.vector(local)[i] if len(axes) == 3 else local[i]
+            for i, coefficient in axes.items():
                 dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, boundary))
                 located.append((dofs, i, coefficient))
         #: The dofs held at zero (every component: a dof index is one component's).
@@ -107,7 +101,7 @@ class Supports:
 
 def dead_loads(scene, tagged, disc, frame, kinematics, v):
     """External virtual work present from the first step: dead tractions and gravity
-    (−γ e_z per volume of the step's configuration), or None."""
+    (−γ e_z, e_z the scene's, per volume of the step's configuration), or None."""
     ds = disc.facet_measure(tagged.facet_tags)
     form = None
     for dead in scene.tractions:
@@ -115,7 +109,8 @@ def dead_loads(scene, tagged, disc, frame, kinematics, v):
                         ds(tagged.boundaries[dead.boundary]), v)
         form = term if form is None else form + term
     if scene.geostatic is not None:
-        gravity = -scene.geostatic.unit_weight * disc.displacement(v)[2] * disc.measure()
+        up = ufl.as_vector(frame.vector([0.0, 0.0, 1.0]))
+        gravity = -scene.geostatic.unit_weight * ufl.dot(up, disc.displacement(v)) * disc.measure()
         form = gravity if form is None else form + gravity
     return form
 
@@ -136,7 +131,8 @@ class BoundaryLoad:
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))
         self.external = (traction(disc, kinematics, self._load, self.direction, self._ds, v)
                          if loading.control is Control.FORCE else None)
-        self._probe = probe(disc, tagged, (loading.boundary,), self.direction, supports.held)
+        self._probe = probe(disc, tagged, (loading.boundary,), loading.direction.vector,
+                            supports.held)
         self._v, self._force = v, None
         self._area = area_of(mesh, self._ds)
         self._displacement = fem.form(

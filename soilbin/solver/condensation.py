@@ -44,13 +44,13 @@ class Uncondensed:
     description = "displacement only"
 
     def __init__(self, disc):
-        self._space = disc.space
+        self._space, self._disc = disc.space, disc
         self._nullspace = None
 
     def condense(self, A):
         if self._nullspace is None:
             n_owned = self._space.dofmap.index_map.size_local
-            coordinates = self._space.tabulate_dof_coordinates()[:n_owned]
+            coordinates = self._disc.in_dof_axes(self._space.tabulate_dof_coordinates()[:n_owned])
             self._nullspace = rigid_body_modes(A.createVecRight(), coordinates)
             A.setNearNullSpace(self._nullspace)
         return A
@@ -80,7 +80,7 @@ class CellCondensation:
         _, first = np.unique(triplets[:, 0], return_index=True)
         first = first[triplets[first, 0] < imap.size_local]       # owned nodes
         u_local = triplets[first].ravel().astype(np.int32)
-        self._coordinates = mesh.geometry.x[nodes[first]]
+        self._coordinates = disc.in_dof_axes(mesh.geometry.x[nodes[first]])
         n_cells = cells.size_local
         cell_fields = np.stack([space.sub(i).dofmap.list.array[:n_cells] for i in (1, 2)], axis=1)
         comm = space.mesh.comm
