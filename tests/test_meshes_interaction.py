@@ -157,15 +157,17 @@ def test_retaining_wall_volume_faces_and_cells(values):
     assert np.isclose(tm.mesh.geometry.x[:, 1], 0.0).sum() * 2 == len(tm.mesh.geometry.x)  # one layer
 
 
-def test_retaining_wall_size_refine_and_grading():
+def test_retaining_wall_size_refine_and_grading_toward_the_toe():
     coarse, fine = built("retaining_wall"), built("retaining_wall", refine=2)
     assert 200 <= num_cells(coarse) <= 1000
     assert num_cells(fine) == 4 * num_cells(coarse)
     assert num_cells(coarse) == RetainingWallParams().cells
-    v = cell_volumes(coarse)
-    near = v[cells_touching(coarse, ["wall"])]
-    assert smallest(near) == smallest(v)
-    assert largest(near) < smallest(v[cells_touching(coarse, ["far"])])
+    assert smallest(cell_volumes(coarse)) == pytest.approx(largest(cell_volumes(coarse)))  # uniform
+    graded = built("retaining_wall", element_size=0.25, growth=1.3)
+    v = cell_volumes(graded)
+    toe = np.intersect1d(cells_touching(graded, ["wall"]), cells_touching(graded, ["below_wall"]))
+    assert largest(v[toe]) <= 0.25**2 and smallest(v) == smallest(v[toe])   # at most 0.25 at the toe
+    assert largest(v[toe]) < smallest(v[cells_touching(graded, ["surface", "far", "base"])])
 
 
 @pytest.mark.parametrize("name, values, culprit", [

@@ -4,10 +4,12 @@
 The soil fills x in [0, length], z in [-depth, 0] (z up, ground surface
 z = 0); the wall is x = 0 for z in [-wall_height, 0], and below its toe x = 0
 is the separate group ``below_wall``. So that every mesh has the same groups,
-the soil must reach below the toe (wall_height < depth). Elements are at most
-element_size long at the wall, its toe and the surface, and grow by the
-factor growth away from the wall, and up and down from the toe; refine then
-splits each of them into refine^2 in the x-z plane.
+the soil must reach below the toe (wall_height < depth). The elements are at
+most element_size long at the toe, where the moving wall meets the held soil below
+it, and grow by the factor growth away from it: in x from the wall, in z up
+to the surface and down to the base (growth = 1, the default, is a uniform
+mesh). refine then splits each of them into refine^2 in the x-z plane
+(nested: element_size / refine at the toe).
 """
 from dataclasses import dataclass
 
@@ -23,8 +25,8 @@ class RetainingWallParams(Params):
     length: float = length_param(30.0, "extent of the soil in x, from the wall")
     depth: float = length_param(15.0, "depth of the soil (> wall_height)")
     thickness: float = length_param(1.0, "thickness of the slab in y (one element)")
-    element_size: float = length_param(0.5, "length of the elements at the wall, its toe and the surface")
-    growth: float = param(1.1, lo=1.0, hi=2.0, doc="ratio of neighbouring element lengths away from them")
+    element_size: float = length_param(1.0, "largest length of the elements at the wall's toe")
+    growth: float = param(1.0, lo=1.0, hi=2.0, doc="ratio of neighbouring element lengths away from the toe")
     refine: int = refine_param("splits every element into refine^2 in x-z "
                                "(nested; refine = 2 gives 4x the cells)")
 
@@ -42,19 +44,18 @@ class RetainingWallParams(Params):
         return sum(s.n for s in xs) * sum(s.n for s in zs)
 
     def segments(self):
-        """The x and the z divisions (ascending) of the slab."""
-        toe, middle = -self.wall_height, -self.wall_height / 2.0
+        """The x and the z divisions (ascending) of the slab, graded from the toe."""
+        toe = -self.wall_height
 
         def segment(start, end):
             return Segment.growing(start, end, self.element_size, self.growth).refined(self.refine)
 
-        return ([segment(0.0, self.length)],
-                [segment(toe, -self.depth), segment(toe, middle), segment(0.0, middle)])
+        return [segment(0.0, self.length)], [segment(toe, -self.depth), segment(toe, 0.0)]
 
 
 RETAINING_WALL = Builder(
     name="retaining_wall", params=RetainingWallParams,
     summary="plane-strain slab (one hex layer in y) behind a rigid wall x = 0 down to its toe, graded "
-            "toward the wall, its toe and the surface",
+            "toward its toe",
     regions=("soil",), boundaries=("wall", "below_wall", "surface", "far", "base", "front", "back"),
     contact=(), geometry="retaining_wall_geometry")

@@ -6,7 +6,10 @@ displacement under displacement control. Its observables are the mean
 displacement of the boundary and the force on it, both along the loading
 direction: the force is the internal force of the soil on the boundary's
 dofs (the reaction under displacement control, the applied load at
-equilibrium under force control).
+equilibrium under force control). A node that a support holds in a component
+stays held in it where the driven boundary meets the support (e.g. the toe of
+a wall pushed over soil held below it): only the boundary's other nodes move,
+and the force is read on those.
 """
 import numpy as np
 import ufl
@@ -24,16 +27,17 @@ def facets(tagged, name):
     return tagged.facet_tags.find(tagged.boundaries[name])
 
 
-def probe(disc, tagged, boundaries, vector):
+def probe(disc, tagged, boundaries, vector, held):
     """A function of the unknown's space equal to ``vector`` (dof components: the scene's
-    axes) on the displacement dofs of the named boundaries and zero elsewhere: the virtual
-    displacement that reads a resultant."""
+    axes) on the displacement dofs of the named boundaries, except the dofs ``held`` by
+    supports, and zero elsewhere: the virtual displacement that reads a resultant."""
     V, tdim = disc.displacement_space, disc.mesh.topology.dim
     field = fem.Function(disc.space)
     for i in np.flatnonzero(vector):
         for name in boundaries:
             dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
             field.x.array[dofs] = vector[i]
+    field.x.array[held] = 0.0
     field.x.scatter_forward()
     return field
 
@@ -47,20 +51,29 @@ def traction(disc, kinematics, magnitude, vector, measure, v):
 class Supports:
     """Dirichlet conditions: supports, plane strain, and under displacement control the driven
     boundary, whose prescribed values :meth:`move` sets. Components are the scene's own axes,
-    which are those of the displacement dofs also in a rotated frame (``disc.basis``)."""
+    which are those of the displacement dofs also in a rotated frame (``disc.basis``). Where
+    the driven boundary meets a support, the dofs the support holds stay held: the driven
+    boundary moves its other dofs."""
 
     def __init__(self, scene, tagged, disc):
         mesh, V = disc.mesh, disc.displacement_space
         tdim = mesh.topology.dim
         self._moving = []   # (Constant, coefficient of the prescribed displacement)
         self.bcs = []
+        located = []        # (dofs, component, coefficient)
         for boundary, axes in self._constraints(scene).items():
             for i, coefficient in axes.items():
                 dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, boundary))
-                value = fem.Constant(mesh, PETSc.ScalarType(0.0))
-                if coefficient != 0.0:
-                    self._moving.append((value, coefficient))
-                self.bcs.append(fem.dirichletbc(value, dofs, V.sub(i)))
+                located.append((dofs, i, coefficient))
+        #: The dofs held at zero (every component: a dof index is one component's).
+        self.held = np.unique(np.concatenate(
+            [np.empty(0, np.int32)] + [dofs for dofs, _, coefficient in located if coefficient == 0.0]))
+        for dofs, i, coefficient in located:
+            value = fem.Constant(mesh, PETSc.ScalarType(0.0))
+            if coefficient != 0.0:
+                self._moving.append((value, coefficient))
+                dofs = np.setdiff1d(dofs, self.held).astype(np.int32)
+            self.bcs.append(fem.dirichletbc(value, dofs, V.sub(i)))
         if scene.analysis.plane_strain:   # the dofs of every cell
             cells = mesh.topology.index_map(tdim)
             all_cells = np.arange(cells.size_local + cells.num_ghosts, dtype=np.int32)
@@ -118,7 +131,8 @@ class BoundaryLoad:
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))
         self.external = (traction(disc, kinematics, self._load, self.direction, self._ds, v)
                          if loading.control is Control.FORCE else None)
-        self._probe = probe(disc, tagged, (loading.boundary,), loading.direction.vector)
+        self._probe = probe(disc, tagged, (loading.boundary,), loading.direction.vector,
+                            supports.held)
         self._v, self._force = v, None
         self._area = area_of(mesh, self._ds)
         self._displacement = fem.form(
