@@ -14,7 +14,8 @@ chapter8 markers:
   against large deformation (read off the curve at 12, 24, ... lb, linear
   between converged steps where the adaptive steps did not land on one).
 Loads and travel in lb and in; the dissertation's figures 8.2-8.9 are the
-study's figure-8.*.png, figures 8.10-8.12 each case's sections-*.png.
+study's figure-8.*.png, figures 8.10-8.12 each case's sections-*.png (--no-run draws the figures of
+the cases finished so far).
 """
 import argparse
 import csv
@@ -30,7 +31,7 @@ import numpy as np
 from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
 from soilbin.run import draft_estimate
 from soilbin.scene import load_scene
-from soilbin.study import load_study
+from soilbin.study import Outcome, draw_figures, load_study
 
 ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "chapter8.toml"
@@ -41,11 +42,11 @@ KEYS = ("mesh.configuration", "mesh.tool_width", "mesh.rake_angle", "tool.bonded
         "analysis.large_deformation")
 
 
-def cases(folder):
-    """(overrides dict, summary, curve rows, scene run) of every case of the study, in its
-    order, that left a summary in its folder (of this code or an earlier one: the
+def cases(study, folder):
+    """(overrides dict, summary, curve rows, scene run, case) of every case of the study, in
+    its order, that left a summary in its folder (of this code or an earlier one: the
     study itself decides what to run again)."""
-    for case in load_study(STUDY).cases:
+    for case in study.cases:
         run = folder / case.name
         try:
             summary = json.loads((run / "summary.json").read_text())
@@ -56,7 +57,8 @@ def cases(folder):
         values = dict(item.split("=", 1) for item in summary["overrides"])
         with open(run / "curve.csv") as f:
             rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-        yield {k: values[k].strip('"') for k in KEYS}, summary, rows, load_scene(run / "scene.toml")
+        yield ({k: values[k].strip('"') for k in KEYS}, summary, rows,
+               load_scene(run / "scene.toml"), case)
 
 
 def estimates(scene):
@@ -83,7 +85,7 @@ def case_table(results):
     lines = ["| tool | interface | deformation | travel at 36 / 72 / 108 lb [in] | lift at the "
              "last step [lb] | estimate: cap surface / lab φ [lb] | status | Newton (steps) | wall (s) |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for values, summary, rows, scene in results:
+    for values, summary, rows, scene, _ in results:
         tool = (f"{values['mesh.tool_width']}-in, {values['mesh.rake_angle']}°, "
                 f"{values['mesh.configuration'].replace('_', ' ')}")
         lines.append(" | ".join([
@@ -98,7 +100,7 @@ def case_table(results):
 
 def volume_change_table(results):
     """Increments of the front element's volumetric strain per 12-lb step, x 10^3."""
-    picked = {values["analysis.large_deformation"]: rows for values, _, rows, _ in results
+    picked = {values["analysis.large_deformation"]: rows for values, _, rows, _, _ in results
               if values["mesh.configuration"] == "embedded" and values["mesh.tool_width"] == "2"
               and values["mesh.rake_angle"] == "90" and values["tool.bonded"] == "false"}
     loads = 12.0 * np.arange(8)
@@ -130,7 +132,11 @@ def main():
     if not args.no_run:
         subprocess.run([SOILBIN, "study", STUDY, "--out", args.out, "--jobs", str(args.jobs)],
                        cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
-    results = list(cases(args.out))
+    study = load_study(STUDY)
+    results = list(cases(study, args.out))
+    # the figures of the finished cases (the study draws them itself once all are done)
+    draw_figures(study, [Outcome(case, summary["status"], summary, ran=False)
+                         for _, summary, _, _, case in results], args.out)
     text = (case_table(results) + "\n\nVolume change of the soil element in front of the embedded "
             "2-in vertical tool with the interface: incremental volumetric strain × 10³ per 12-lb "
             "step (negative in compression; dissertation: small −0.54, −1.53, −1.31, −1.19, −2.70, "

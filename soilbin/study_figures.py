@@ -23,6 +23,14 @@ def _save(fig, ax, path):
     pyplot().close(fig)
 
 
+def _legend(case, figure, study):
+    """The case's swept values that the figure does not select on (its folder name if none)."""
+    fixed = {key for key, _ in figure.select}
+    text = ", ".join(f"{short} = {label(case.values[key])}" for key, short in study.short.items()
+                     if key in case.values and key not in fixed)
+    return text or case.name
+
+
 def curves_png(figure, outcomes, study, out):
     """curve.csv column y against column x, one line per case that converged a step."""
     fig, ax = _axes(figure, study, figure.x, figure.y)
@@ -31,7 +39,7 @@ def curves_png(figure, outcomes, study, out):
         rows = list(csv.DictReader(path.open())) if path.exists() else []
         if rows:
             ax.plot([float(r[figure.x]) for r in rows], [float(r[figure.y]) for r in rows],
-                    "o-", ms=3, label=outcome.case.name)
+                    "o-", ms=3, label=_legend(outcome.case, figure, study))
     _save(fig, ax, out / f"{figure.name}.png")
 
 
