@@ -32,7 +32,7 @@ class RigidToolContact:
         nodes_map = scalar_space.dofmap.index_map
         owned = nodes_map.size_local
         # the unknown's dof of each component at each node, matched cell by cell (no
-        # V.sub(i).collapse(): its dof reordering takes minutes on 10^6 dofs)
+        # V.sub(i).collapse(), which builds and reorders a dof map per component)
         nodal_dofs = np.empty((owned + nodes_map.num_ghosts, 3), dtype=np.int32)
         nodal_dofs[scalar_space.dofmap.list.array] = np.stack(
             [V.sub(i).dofmap.list.array for i in range(3)], axis=1)
