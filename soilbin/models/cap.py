@@ -82,7 +82,7 @@ History: ``stress``, ``cap_L``, ``cap_X`` (compression-positive I1),
 ``eps_p_vol`` (trace of the plastic strain, tension positive), ``eps_p_eq``
 and ``yield_state``: 0 elastic, 1 failure surface, 2 apex or corner of
 failure surface and cut-off, 3 cut-off, 4 cap, 5 corner of cap and failure
-surface (codes of :mod:`.invariant_return`).
+surface (codes of :mod:`.base`).
 """
 import abc
 import dataclasses
@@ -94,9 +94,10 @@ import numpy as np
 from ..params import param
 from .cone import tension_cutoff_param
 from .elastic import IsotropicElasticity
-from .invariant_return import (APEX, CAP, CAP_CORNER, CUTOFF, FAILURE, YIELD_TOL, LinearBulk,
-                               Response, Trial, check_converged, invariants, scalar_root,
-                               smooth_return)
+from ..tensors import IDENTITY
+from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
+from .invariant_return import (YIELD_TOL, LinearBulk, Response, Trial, check_converged,
+                               invariants, scalar_root, smooth_return)
 
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
@@ -426,6 +427,28 @@ class CapModel(IsotropicElasticity):
         return kappa
 
 
+def cap_samples(table, cohesive):
+    """Conformance samples of a cap model from its parameter tables with X0 = 20:
+    ``table`` with the apex at I1 = 0 (A = C) and no cut-off, ``cohesive`` with
+    the apex in tension and a cut-off below it; each with both hardenings."""
+    n, I = SHEAR, IDENTITY
+    # (mode, compression-positive p_n, deps, yield_state)
+    plain = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
+             ("failure", 3.0, 2e-3 * n, FAILURE),
+             ("apex", 0.5, 1e-2 * I + 1e-4 * n, APEX),
+             ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
+             ("cap corner", 3.85, 1e-2 * n, CAP_CORNER)]       # I1_n = 11.55 just below L
+    cut = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
+           ("failure", 1.0, 2e-3 * n, FAILURE),
+           ("cut-off", 0.0, 3e-4 * I + 1e-5 * n, CUTOFF),
+           ("corner", 0.0, 3e-3 * I + 3e-3 * n, APEX),           # failure surface / cut-off
+           ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
+           ("cap corner", 2.8, 1e-2 * n, CAP_CORNER)]
+    return [Sample(mode, {**t, "hardening": h.value}, -p * I, deps, code)
+            for h in CapHardening for t, cases in ((table, plain), (cohesive, cut))
+            for mode, p, deps, code in cases]
+
+
 @dataclasses.dataclass(frozen=True)
 class DiMaggioSandler(CapModel):
     """DiMaggio–Sandler cap: F(I1) = A - C exp(-beta I1) (eq. B.9; module doc)."""
@@ -435,6 +458,11 @@ class DiMaggioSandler(CapModel):
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)
         return self.A - e, self.beta * e, -self.beta**2 * e
+
+    @classmethod
+    def conformance_samples(cls):
+        table = {k: v for k, v in SECTION_VII5.items() if k != "B"} | {"X0": 20.0}
+        return cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 1.0})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -451,3 +479,8 @@ class ModifiedCap(CapModel):
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)
         return self.A + self.B * I1 - e, self.B + self.beta * e, -self.beta**2 * e
+
+    @classmethod
+    def conformance_samples(cls):
+        table = {**SECTION_VII5, "X0": 20.0}
+        return cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 0.5})

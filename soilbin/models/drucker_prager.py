@@ -5,7 +5,7 @@ import math
 
 from ..errors import InputError
 from ..params import param
-from .cone import ConeModel, tension_cutoff_param
+from .cone import ConeModel, cone_samples, tension_cutoff_param
 from .matching import Matching
 
 
@@ -41,3 +41,11 @@ class DruckerPrager(ConeModel):
     @property
     def flow_slope(self):
         return 3.0 * self.matching.coefficients(self.c, self.psi)[0]
+
+    @classmethod
+    def conformance_samples(cls):
+        # The apex k / eta = 866 for either matching; cut-offs below it.
+        compression, plane = ({"E": 1.0e5, "nu": 0.3, "c": 500.0, "phi": 30.0, "matching": m.value}
+                              for m in Matching)
+        return cone_samples([compression, plane], [{**compression, "tension_cutoff": 100.0},
+                                                   {**plane, "tension_cutoff": 0.0}])

@@ -5,8 +5,8 @@ import math
 import numpy as np
 
 from ..params import param
-from ..tensors import P_DEV, P_VOL
-from .base import Model
+from ..tensors import IDENTITY, P_DEV, P_VOL
+from .base import ELASTIC, SHEAR, Model, Sample
 
 
 def elastic_stiffness(K, G):
@@ -59,3 +59,8 @@ class LinearElastic(IsotropicElasticity):
         sigma = self.trial(deps, state["stress"])
         tangent = np.repeat(self.stiffness[None], len(sigma), axis=0)
         return sigma, tangent, {"stress": sigma}
+
+    @classmethod
+    def conformance_samples(cls):
+        return [Sample("elastic", {"E": 1.0e5, "nu": 0.3}, -200.0 * IDENTITY,
+                       2e-2 * SHEAR + 5e-2 * IDENTITY, ELASTIC, fd_step=1e-9)]

@@ -63,15 +63,8 @@ import numpy as np
 
 from ..errors import ReturnMapError
 from ..tensors import IDENTITY, P_DEV, SQRT2, deviator, trace
+from .base import ELASTIC
 
-#: yield_state codes shared by the soil models (0-3 as the cone models):
-#: elastic; on the failure (shear) surface, or for Cam-Clay on the yield
-#: surface dry of critical (dilating); at the apex of the failure surface or
-#: its corner with the tension cut-off (for Cam-Clay: at the origin, sigma = 0);
-#: on the tension cut-off; on the cap, or for Cam-Clay on the yield surface
-#: wet of critical (compacting); at the corner of cap and failure surface;
-#: at the vertex of Cam-Clay on the mean-stress axis (p = p_c, q = 0).
-ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER, TIP = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
 #: Trial states with f_tr below this fraction of the stress scale are elastic.
 YIELD_TOL = 1e-12
 #: Local Newton: tolerance on the scaled residual, iterations, line-search halvings.
