@@ -96,8 +96,8 @@ from .cone import tension_cutoff_param
 from .elastic import IsotropicElasticity
 from ..tensors import IDENTITY
 from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
-from .invariant_return import (YIELD_TOL, LinearBulk, Response, Trial, check_converged,
-                               invariants, scalar_root, smooth_return)
+from .invariant_return import (YIELD_TOL, LinearBulk, Response, Surface, Trial,
+                               check_converged, invariants, scalar_root, smooth_return)
 
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
@@ -402,10 +402,10 @@ class CapModel(IsotropicElasticity):
             r3 = rho**3
             height = np.where(free, F, (kappa - L_min) / R + F)
             f_h = np.where(free, -a / (R * rho) - dF, -1.0 / R - dF)
-            return (rho - height, 3.0 * a / (R * rho), J / rho, f_h,
-                    9.0 * J**2 / (R**2 * r3), -3.0 * a * J / (R * r3), a**2 / r3,
-                    np.where(free, -3.0 * J**2 / (R**2 * r3), 0.0),
-                    np.where(free, a * J / (R * r3), 0.0), scale[k])
+            return Surface(f=rho - height, f_p=3.0 * a / (R * rho), f_J=J / rho, f_h=f_h,
+                           f_pp=9.0 * J**2 / (R**2 * r3), f_pJ=-3.0 * a * J / (R * r3),
+                           f_JJ=a**2 / r3, f_ph=np.where(free, -3.0 * J**2 / (R**2 * r3), 0.0),
+                           f_Jh=np.where(free, a * J / (R * r3), 0.0), scale=scale[k])
 
         def admissible(p, J, kappa, k):
             # A cap of positive size; without the retreat kappa never goes below L_min.

@@ -72,8 +72,8 @@ from ..params import param
 from .elastic import IsotropicElasticity
 from ..tensors import IDENTITY
 from .base import APEX, CAP, ELASTIC, FAILURE, SHEAR, TIP, Sample
-from .invariant_return import (YIELD_TOL, ExponentialBulk, LinearBulk, Response, Trial,
-                               check_converged, invariants, scalar_root, smooth_return)
+from .invariant_return import (YIELD_TOL, ExponentialBulk, LinearBulk, Response, Surface,
+                               Trial, check_converged, invariants, scalar_root, smooth_return)
 
 SQRT3 = math.sqrt(3.0)
 #: Tensile trials whose smooth Cam-Clay return has p / p_c below exp(-ORIGIN_EXPONENT)
@@ -161,7 +161,7 @@ class CriticalStateModel(IsotropicElasticity):
         raise NotImplementedError
 
     def surface(self, p, J, y, pc_n, f_scale):
-        """(f, f_p, f_J, f_y, f_pp, f_pJ, f_JJ, f_py, f_Jy, f_scale) at p_c = pc_n exp(y)."""
+        """The :class:`.invariant_return.Surface` at p_c = pc_n exp(y) (h = y)."""
         raise NotImplementedError
 
     def yield_pressure(self, p, J):
@@ -287,9 +287,10 @@ class ModifiedCamClay(CriticalStateModel):
         rho = np.sqrt(a**2 + b2)
         r3 = rho**3
         f_pc = -0.5 * (a / rho + 1.0)
-        return (rho - 0.5 * pc, a / rho, 3.0 * J / (M2 * rho), f_pc * pc,
-                b2 / r3, -3.0 * a * J / (M2 * r3), 3.0 * a**2 / (M2 * r3),
-                -0.5 * b2 / r3 * pc, 1.5 * a * J / (M2 * r3) * pc, f_scale)
+        return Surface(f=rho - 0.5 * pc, f_p=a / rho, f_J=3.0 * J / (M2 * rho), f_h=f_pc * pc,
+                       f_pp=b2 / r3, f_pJ=-3.0 * a * J / (M2 * r3), f_JJ=3.0 * a**2 / (M2 * r3),
+                       f_ph=-0.5 * b2 / r3 * pc, f_Jh=1.5 * a * J / (M2 * r3) * pc,
+                       scale=f_scale)
 
     def yield_pressure(self, p, J):
         return p + 3.0 * J**2 / (self.M**2 * p)
@@ -324,8 +325,9 @@ class CamClay(CriticalStateModel):
         M = self.M
         log_ratio = np.log(p / pc_n) - y
         zero = np.zeros_like(p)
-        return (SQRT3 * J + M * p * log_ratio, M * (log_ratio + 1.0), np.full_like(p, SQRT3),
-                -M * p, M / p, zero, zero, np.full_like(p, -M), zero, f_scale)
+        return Surface(f=SQRT3 * J + M * p * log_ratio, f_p=M * (log_ratio + 1.0),
+                       f_J=np.full_like(p, SQRT3), f_h=-M * p, f_pp=M / p, f_pJ=zero, f_JJ=zero,
+                       f_ph=np.full_like(p, -M), f_Jh=zero, scale=f_scale)
 
     def yield_pressure(self, p, J):
         return p * np.exp(np.minimum(SQRT3 * J / (self.M * p), 700.0))
