@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import ReturnMapError
 from ..params import Params
+from ..tensors import deviator, trace
 
 State = dict[str, np.ndarray]
 
@@ -34,6 +35,14 @@ SHEAR = np.array([-0.09063425125224764, 0.19020462782182082, -0.0995703765695731
 #: of critical (compacting); at the corner of cap and failure surface; at the
 #: vertex of Cam-Clay on the mean-stress axis (p = p_c, q = 0).
 ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER, TIP = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
+
+
+def stress_invariants(stress):
+    """(p, s, |s|) of (n, 6) Mandel stresses: the mean stress p = tr(sigma) / 3
+    (tension positive; the invariant models negate it), the deviator s and its
+    norm |s| = sqrt(2 J2)."""
+    s = deviator(stress)
+    return trace(stress) / 3.0, s, np.linalg.norm(s, axis=-1)
 
 
 @dataclasses.dataclass(frozen=True)

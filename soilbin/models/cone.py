@@ -51,8 +51,8 @@ import math
 import numpy as np
 
 from ..params import param
-from ..tensors import IDENTITY, P_DEV, SQRT2, deviator, trace
-from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
+from ..tensors import IDENTITY, P_DEV, SQRT2
+from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample, stress_invariants
 from .elastic import IsotropicElasticity, elastic_stiffness
 
 #: Trial states with f_tr below this fraction of the stress scale are elastic.
@@ -76,9 +76,7 @@ def return_map(sigma_tr, K, G, eta, k, tension_cutoff=math.inf, eta_g=None):
     (eta, k) with the flow potential's slope ``eta_g`` (default eta: associated),
     optionally cut off at the mean stress p = ``tension_cutoff``."""
     eta_g = eta if eta_g is None else eta_g
-    p_tr = trace(sigma_tr) / 3.0
-    s_tr = deviator(sigma_tr)
-    s_norm = np.linalg.norm(s_tr, axis=-1)
+    p_tr, s_tr, s_norm = stress_invariants(sigma_tr)
     J_tr = s_norm / SQRT2
     f_tr = J_tr + eta * p_tr - k
     plastic = f_tr > YIELD_TOL * (k + J_tr + eta * np.abs(p_tr))

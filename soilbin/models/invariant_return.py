@@ -63,7 +63,7 @@ import numpy as np
 
 from ..errors import ReturnMapError
 from ..tensors import IDENTITY, P_DEV, SQRT2, deviator, trace
-from .base import ELASTIC
+from .base import ELASTIC, stress_invariants
 
 #: Trial states with f_tr below this fraction of the stress scale are elastic.
 YIELD_TOL = 1e-12
@@ -129,17 +129,18 @@ class Trial:
 
     @classmethod
     def split(cls, deps, stress_n, G):
-        s_n = deviator(stress_n)
+        p_n, s_n, _ = stress_invariants(stress_n)
         s_tr = s_n + 2.0 * G * deviator(deps)
         s_norm = np.linalg.norm(s_tr, axis=-1)
         n = s_tr / np.where(s_norm > 0.0, s_norm, 1.0)[:, None]
-        return cls(-trace(stress_n) / 3.0, -trace(deps), s_n, s_tr, s_norm / SQRT2, n)
+        return cls(-p_n, -trace(deps), s_n, s_tr, s_norm / SQRT2, n)
 
 
 def invariants(stress):
-    """(p, J) of (n, 6) stresses, compression-positive p."""
-    s = deviator(stress)
-    return -trace(stress) / 3.0, np.sqrt(0.5 * np.sum(s * s, axis=-1))
+    """(p, J) of (n, 6) stresses, compression-positive p (J as sqrt(s:s / 2), the
+    initial states' numbers)."""
+    p, s, _ = stress_invariants(stress)
+    return -p, np.sqrt(0.5 * np.sum(s * s, axis=-1))
 
 
 class Response:
