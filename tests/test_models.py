@@ -48,9 +48,11 @@ def cone_f(model, sigma):
 
 @pytest.mark.parametrize("name", ["von_mises", "drucker_prager"])
 def test_associated_cone_tangent_is_symmetric(name):
-    # In every return mode of the conformance samples (associated flow: psi = phi).
+    # In every return mode of the conformance samples with associated flow.
     for sample in MODELS[name].conformance_samples():
         model = from_table(MODELS[name], sample.table, "m")
+        if model.flow_slope != model.cone[0]:
+            continue
         _, tangent, _ = model.update(sample.deps[None], model.initial_state(1, sample.stress))
         np.testing.assert_allclose(tangent, np.swapaxes(tangent, 1, 2),
                                    atol=1e-12 * np.abs(model.stiffness).max())
