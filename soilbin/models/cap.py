@@ -102,6 +102,9 @@ from .invariant_return import (YIELD_TOL, LinearBulk, Response, Surface, Trial,
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
                 "R": 2.0, "W": 0.18, "D": 0.05}
+#: McCormick Ranch sand (ksi, 1/ksi; Sandler & Rubin 1979): K = 66.67, G = 40.
+MCCORMICK_RANCH = {"E": 100.0, "nu": 0.25, "A": 0.25, "C": 0.18, "beta": 0.67, "R": 2.5,
+                   "W": 0.066, "D": 0.67}
 
 
 class CapHardening(enum.Enum):
@@ -449,6 +452,25 @@ def cap_samples(table, cohesive):
             for mode, p, deps, code in cases]
 
 
+def retreating_samples(cls):
+    """Conformance samples of the retreating cap at the sand's scale (ksi), from
+    the cap end X_n (the centre L = max(kappa(X_n), 0)): the return modes the
+    retreat adds."""
+    table = {**MCCORMICK_RANCH, "X0": 1.0, "hardening": CapHardening.VOLUMETRIC.value}
+    sand = cls(**{**table, "hardening": CapHardening.VOLUMETRIC})
+    n, I = SHEAR, IDENTITY
+    # (mode, compression-positive p_n, deps, X_n, yield_state)
+    cases = [("failure, the cap retreating", 0.1, 2e-5 * I + 2e-3 * n, 1.0, FAILURE),
+             ("moving cap corner", 0.01, 1e-4 * I + 3e-3 * n, 0.2, CAP_CORNER),
+             ("cap corner held at L = 0", 0.01, 5e-4 * I + 1e-2 * n, 0.2, CAP_CORNER),
+             ("shrunken cap, kappa < 0", 0.01, -3e-4 * I + 1e-4 * n, 0.1, CAP),
+             ("apex, lifted", 0.01, 1e-3 * I, 0.1, APEX)]
+    return [Sample(mode, table, -p * I, deps, code,
+                   {"cap_L": max(float(sand.kappa(np.array([X]))[0]), sand.L_min), "cap_X": X},
+                   fd_step=1e-9)
+            for mode, p, deps, X, code in cases]
+
+
 @dataclasses.dataclass(frozen=True)
 class DiMaggioSandler(CapModel):
     """DiMaggio–Sandler cap: F(I1) = A - C exp(-beta I1) (eq. B.9; module doc)."""
@@ -462,7 +484,8 @@ class DiMaggioSandler(CapModel):
     @classmethod
     def conformance_samples(cls):
         table = {k: v for k, v in SECTION_VII5.items() if k != "B"} | {"X0": 20.0}
-        return cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 1.0})
+        return (cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 1.0})
+                + retreating_samples(cls))
 
 
 @dataclasses.dataclass(frozen=True)
