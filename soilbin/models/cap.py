@@ -92,12 +92,12 @@ import math
 import numpy as np
 
 from ..params import param
-from .cone import tension_cutoff_param
-from .elastic import IsotropicElasticity
 from ..tensors import IDENTITY
 from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
-from .invariant_return import (YIELD_TOL, LinearBulk, Response, Surface, Trial,
-                               check_converged, invariants, scalar_root, smooth_return)
+from .cone import tension_cutoff_param
+from .elastic import IsotropicElasticity
+from .invariant_return import (YIELD_TOL, Response, Surface, Trial, check_converged, invariants,
+                               scalar_root, smooth_return)
 
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
@@ -244,7 +244,7 @@ class CapModel(IsotropicElasticity):
 
     def integrate(self, deps, state):
         G, K, R = self.G, self.K, self.R
-        bulk = LinearBulk(K)
+        bulk = self.bulk
         trial = Trial.split(deps, state["stress"], G)
         p_n, de_v, J_tr = trial.p_n, trial.de_v, trial.J_tr
         L_n, X_n = state["cap_L"], state["cap_X"]

@@ -69,11 +69,11 @@ import numpy as np
 
 from ..errors import InputError
 from ..params import param
-from .elastic import IsotropicElasticity
 from ..tensors import IDENTITY
 from .base import APEX, CAP, ELASTIC, FAILURE, SHEAR, TIP, Sample
-from .invariant_return import (YIELD_TOL, ExponentialBulk, LinearBulk, Response, Surface,
-                               Trial, check_converged, invariants, scalar_root, smooth_return)
+from .elastic import ExponentialBulk, IsotropicElasticity, LinearBulk
+from .invariant_return import (YIELD_TOL, Response, Surface, Trial, check_converged, invariants,
+                               scalar_root, smooth_return)
 
 SQRT3 = math.sqrt(3.0)
 #: Tensile trials whose smooth Cam-Clay return has p / p_c below exp(-ORIGIN_EXPONENT)
@@ -149,7 +149,7 @@ class CriticalStateModel(IsotropicElasticity):
 
     @property
     def bulk(self):
-        """The volumetric elastic law."""
+        """The volumetric elastic law (``elasticity``)."""
         if self.elasticity is CriticalStateElasticity.LINEAR:
             return LinearBulk(self.K)
         return ExponentialBulk(self.kappa / (1.0 + self.e0), self.p_min)

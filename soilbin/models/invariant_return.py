@@ -13,7 +13,8 @@ an associated return with isotropic elasticity and a yield function of
 (p, J) keeps the deviatoric direction of the trial stress, so every local
 problem is one in the (p, J) plane.
 
-Elasticity (:class:`LinearBulk`, :class:`ExponentialBulk`): a constant
+Elasticity (the model's ``bulk``: :class:`.elastic.LinearBulk`,
+:class:`.elastic.ExponentialBulk`): a constant
 shear modulus G, so J_tr = |s_n + 2G dev(deps)| / sqrt2, and a volumetric
 law written through the elastic volumetric strain E(p; p_n) that takes the
 mean stress from p_n to p (linear: (p - p_n)/K; exponential, the
@@ -73,47 +74,6 @@ MAX_ITERATIONS = 60
 MAX_HALVINGS = 40
 #: Residual a stalled line search still accepts as converged (rounding floor).
 STALL_TOL = 1e-10
-
-
-class LinearBulk:
-    """p = p_n + K e: constant bulk modulus."""
-
-    def __init__(self, K):
-        self.K = K
-
-    def pressure(self, p_n, e):
-        return p_n + self.K * e
-
-    def strain(self, p, p_n):
-        """Elastic volumetric strain (compression positive) taking p_n to p."""
-        return (p - p_n) / self.K
-
-    def compliance(self, p):
-        """dE/dp = 1 / K(p)."""
-        return np.full(np.shape(p), 1.0 / self.K)
-
-    def admissible(self, p):
-        return np.isfinite(p)
-
-
-class ExponentialBulk:
-    """K = (p + p_min) / kappa_star, integrated exactly over a step:
-    p + p_min = (p_n + p_min) exp(e / kappa_star)."""
-
-    def __init__(self, kappa_star, p_min):
-        self.kappa_star, self.p_min = kappa_star, p_min
-
-    def pressure(self, p_n, e):
-        return (p_n + self.p_min) * np.exp(np.minimum(e / self.kappa_star, 700.0)) - self.p_min
-
-    def strain(self, p, p_n):
-        return self.kappa_star * np.log((p + self.p_min) / (p_n + self.p_min))
-
-    def compliance(self, p):
-        return self.kappa_star / (p + self.p_min)
-
-    def admissible(self, p):
-        return p + self.p_min > 0.0
 
 
 @dataclasses.dataclass
