@@ -52,6 +52,17 @@ def test_tangent_is_unsymmetric_on_the_cone_iff_non_associated():
             assert asym > 1e-3
 
 
+def test_cutoff_and_corner_hold_the_mean_stress_at_the_cutoff():
+    samples = [s for s in MODELS["drucker_prager"].conformance_samples()
+               if s.table.get("psi", PHI) < PHI and "tension_cutoff" in s.table
+               and s.yield_state in (S_CUTOFF, S_APEX)]
+    assert len(samples) == 4
+    for sample in samples:
+        model = from_table(MODELS["drucker_prager"], sample.table, "m")
+        sigma, _, _ = model.update(sample.deps[None], model.initial_state(1, sample.stress))
+        assert trace(sigma)[0] / 3.0 == pytest.approx(model.tension_cutoff, rel=1e-13)
+
+
 @pytest.mark.parametrize("psi", [0.0, 10.0, 25.0])
 def test_plastic_flow_follows_the_potential(psi):
     """On the cone the plastic strain is dgamma dg/dsigma: its volumetric part over
