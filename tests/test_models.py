@@ -53,7 +53,7 @@ def test_associated_cone_tangent_is_symmetric(name):
         model = from_table(MODELS[name], sample.table, "m")
         if model.flow_slope != model.cone[0]:
             continue
-        _, tangent, _ = model.update(sample.deps[None], model.initial_state(1, sample.stress))
+        _, tangent, _ = model.update(sample.deps[None], sample.state(model))
         np.testing.assert_allclose(tangent, np.swapaxes(tangent, 1, 2),
                                    atol=1e-12 * np.abs(model.stiffness).max())
 

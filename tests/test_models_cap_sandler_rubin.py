@@ -102,8 +102,5 @@ def test_bulk_stiffness_where_the_cap_retreats():
     assert {s.mode for s in samples} == set(STIFF)
     for sample in samples:
         model = from_table(DiMaggioSandler, sample.table, "m")
-        state = model.initial_state(1, sample.stress)
-        for key, value in sample.history.items():
-            state[key][:] = value
-        _, tangent, _ = model.update(sample.deps[None], state)
+        _, tangent, _ = model.update(sample.deps[None], sample.state(model))
         assert (IDENTITY @ tangent[0] @ IDENTITY > 1e-9 * model.K) == STIFF[sample.mode]

@@ -27,10 +27,7 @@ IDS = [f"{name}-{i:02d}-{sample.mode.replace(' ', '_')}"
 def build(name, sample):
     """(model, deps (1, 6), committed state) of a sample."""
     model = from_table(MODELS[name], sample.table, "materials.soil")
-    state = model.initial_state(1, sample.stress)
-    for key, value in sample.history.items():
-        state[key][:] = value
-    return model, np.array([sample.deps]), state
+    return model, np.array([sample.deps]), sample.state(model)
 
 
 @pytest.fixture(params=SAMPLES, ids=IDS)

@@ -44,7 +44,7 @@ def test_tangent_is_unsymmetric_on_the_cone_iff_non_associated():
     # return mode: test_models_conformance.py).
     for sample in MODELS["drucker_prager"].conformance_samples():
         model = from_table(MODELS["drucker_prager"], sample.table, "m")
-        _, tangent, _ = model.update(sample.deps[None], model.initial_state(1, sample.stress))
+        _, tangent, _ = model.update(sample.deps[None], sample.state(model))
         asym = np.abs(tangent - np.swapaxes(tangent, 1, 2)).max() / np.abs(model.stiffness).max()
         if model.psi == model.phi:
             assert asym < 1e-12
@@ -59,7 +59,7 @@ def test_cutoff_and_corner_hold_the_mean_stress_at_the_cutoff():
     assert len(samples) == 4
     for sample in samples:
         model = from_table(MODELS["drucker_prager"], sample.table, "m")
-        sigma, _, _ = model.update(sample.deps[None], model.initial_state(1, sample.stress))
+        sigma, _, _ = model.update(sample.deps[None], sample.state(model))
         assert trace(sigma)[0] / 3.0 == pytest.approx(model.tension_cutoff, rel=1e-13)
 
 

@@ -59,6 +59,13 @@ class Sample:
     history: dict = dataclasses.field(default_factory=dict)
     fd_step: float = 1e-8  # central-difference step of the tangent check
 
+    def state(self, model):
+        """The committed history at one point for ``model`` (built from ``table``)."""
+        state = model.initial_state(1, self.stress)
+        for name, value in self.history.items():
+            state[name][:] = value
+        return state
+
 
 @dataclasses.dataclass(frozen=True)
 class Model(Params, abc.ABC):
