@@ -24,15 +24,12 @@ IDS = [f"{name}-{i:02d}-{sample.mode.replace(' ', '_')}"
        for i, (name, sample) in enumerate(SAMPLES)]
 
 
-def build(name, sample):
-    """(model, deps (1, 6), committed state) of a sample."""
-    model = from_table(MODELS[name], sample.table, "materials.soil")
-    return model, np.array([sample.deps]), sample.state(model)
-
-
 @pytest.fixture(params=SAMPLES, ids=IDS)
 def sample(request):
-    return build(*request.param) + (request.param[1],)
+    """(model, deps (1, 6), committed state, the declared Sample)."""
+    name, declared = request.param
+    model = from_table(MODELS[name], declared.table, "materials.soil")
+    return model, declared.deps[None], declared.state(model), declared
 
 
 def test_yield_state_and_consistent_tangent(sample):
