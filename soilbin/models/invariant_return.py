@@ -14,8 +14,7 @@ an associated return with isotropic elasticity and a yield function of
 problem is one in the (p, J) plane.
 
 Elasticity (the model's ``bulk``: :class:`.elastic.LinearBulk`,
-:class:`.elastic.ExponentialBulk`): a constant
-shear modulus G, so J_tr = |s_n + 2G dev(deps)| / sqrt2, and a volumetric
+:class:`.elastic.ExponentialBulk`): a constant shear modulus G, so J_tr = |s_n + 2G dev(deps)| / sqrt2, and a volumetric
 law written through the elastic volumetric strain E(p; p_n) that takes the
 mean stress from p_n to p (linear: (p - p_n)/K; exponential, the
 kappa-line of critical-state soil mechanics: kappa* ln((p + p_min)/(p_n + p_min))).
@@ -31,8 +30,10 @@ one scalar hardening variable h (:func:`smooth_return`, backward Euler):
     r_h = r_h(h, dgamma f_p)                 hardening driven by the plastic compaction
 
 (dgamma f_p is the plastic compaction, dgamma f_J the plastic shear strain
-conjugate to J; dgamma >= 0 at a solution.) It is solved by :func:`newton`, a Newton iteration with a
-backtracking line search on the scaled residual, vectorised over points.
+conjugate to J; dgamma >= 0 at a solution.) A model gives f and its
+derivatives as a :class:`Surface`; the residual and its Jacobian are those of
+:class:`LocalProblem`. It is solved by :func:`newton`, a Newton iteration with
+a backtracking line search on the scaled residual, vectorised over points.
 The converged Jacobian gives, by the implicit-function theorem, the
 sensitivities of (p, J) to the two inputs (de_v, J_tr), and with them the
 consistent tangent (:func:`invariant_tangent`)
