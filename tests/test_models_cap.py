@@ -1,16 +1,13 @@
-"""DiMaggio–Sandler and modified cap models: consistent tangents by central
-differences in every return mode, returns onto the right surfaces, the
-hardening law under hydrostatic loading, a cap that stays put on unloading,
-triaxial strength, and input checks."""
+"""DiMaggio–Sandler and modified cap models: returns onto the right surfaces,
+the hardening law under hydrostatic loading, a cap that stays put on
+unloading, triaxial strength, the initial cap and the registry (tangents,
+inputs and parameter errors in every return mode: test_models_conformance.py)."""
 import dataclasses
 import math
 
 import numpy as np
 import pytest
 
-from conftest import central_differences
-
-from soilbin.errors import InputError
 from soilbin.models import MODELS, DiMaggioSandler, ModifiedCap
 from soilbin.models.cap import SECTION_VII5, CapHardening
 from soilbin.params import from_table
@@ -46,41 +43,6 @@ def i1_j(sigma):
 def unit_deviator(seed):
     n = deviator(np.random.default_rng(seed).standard_normal(6))
     return n / np.linalg.norm(n)
-
-
-def mode_points(model):
-    """(deps, mean stress p_n (compression positive), expected yield_state), one
-    point per return mode, all from the initial cap X0 = 20."""
-    n = unit_deviator(1)
-    I = IDENTITY
-    if not math.isfinite(model.tension_cutoff):
-        cases = [(1e-5 * n - 1e-5 * I, 3.0, S_ELASTIC),
-                 (2e-3 * n, 3.0, S_FAILURE),
-                 (1e-2 * I + 1e-4 * n, 0.5, S_CORNER),          # the apex (A = C: I1 = 0)
-                 (-3e-3 * I + 5e-4 * n, 5.0, S_CAP),
-                 (1e-2 * n, 3.85, S_CAP_CORNER)]               # I1_n = 11.55 just below L
-    else:
-        cases = [(1e-5 * n - 1e-5 * I, 3.0, S_ELASTIC),
-                 (2e-3 * n, 1.0, S_FAILURE),
-                 (3e-4 * I + 1e-5 * n, 0.0, S_CUTOFF),
-                 (3e-3 * I + 3e-3 * n, 0.0, S_CORNER),          # failure surface / cut-off
-                 (-3e-3 * I + 5e-4 * n, 5.0, S_CAP),
-                 (1e-2 * n, 2.8, S_CAP_CORNER)]
-    deps = np.array([c[0] for c in cases])
-    stress = np.array([-c[1] * IDENTITY for c in cases])
-    return deps, stress, np.array([c[2] for c in cases])
-
-
-@pytest.mark.parametrize("model", ALL + RETREATING, ids=model_id)
-def test_tangent_matches_central_differences(model):
-    deps, stress, expected = mode_points(model)
-    state = model.initial_state(len(deps), stress)
-    assert np.ptp(state["cap_X"]) == 0.0 and state["cap_X"][0] == pytest.approx(20.0, rel=1e-14)
-    _, tangent, new = model.update(deps, state)
-    np.testing.assert_array_equal(new["yield_state"], expected)
-    fd = central_differences(model, deps, state, 1e-8)
-    error = np.abs(fd - tangent).max(axis=(1, 2)) / np.abs(model.stiffness).max()
-    assert error.max() < 1e-6, dict(zip(expected, error))
 
 
 @pytest.mark.parametrize("model", ALL + RETREATING, ids=model_id)
@@ -338,17 +300,11 @@ def test_initial_cap_passes_through_the_initial_stress():
     np.testing.assert_array_equal(new["yield_state"], S_ELASTIC)
 
 
-@pytest.mark.parametrize("model", ALL, ids=model_id)
-def test_update_does_not_mutate_inputs(model):
-    deps, stress, _ = mode_points(model)
-    state = model.initial_state(len(deps), stress)
-    before = {k: v.copy() for k, v in state.items()}
-    _, _, new = model.update(deps, state)
-    assert state.keys() == new.keys() == model.history.keys()
-    for name, shape in model.history.items():
-        np.testing.assert_array_equal(state[name], before[name])
-        assert new[name].shape == (len(deps),) + shape
-        assert not np.shares_memory(new[name], state[name])
+@pytest.mark.parametrize("name", ["modified_cap", "dimaggio_sandler"])
+def test_conformance_samples_start_on_the_initial_cap(name):
+    for sample in MODELS[name].conformance_samples():
+        state = from_table(MODELS[name], sample.table, "m").initial_state(1, sample.stress)
+        assert state["cap_X"][0] == pytest.approx(sample.table["X0"], rel=1e-14)
 
 
 def test_registry_builds_the_caps():
@@ -357,17 +313,3 @@ def test_registry_builds_the_caps():
     model = from_table(MODELS["modified_cap"], VII5, "m")
     assert model.X0 == 0.0 and model.tension_cutoff == math.inf
     assert dataclasses.replace(model, X0=20.0) == MODIFIED
-
-
-@pytest.mark.parametrize("name, key, value", [
-    ("modified_cap", "A", 0.0), ("modified_cap", "B", -0.1), ("modified_cap", "C", 0.0),
-    ("modified_cap", "beta", -1.0), ("modified_cap", "R", 0.0), ("modified_cap", "W", 0.0),
-    ("modified_cap", "D", 0.0), ("modified_cap", "X0", -1.0),
-    ("modified_cap", "tension_cutoff", -1.0), ("dimaggio_sandler", "A", -5.6),
-    ("dimaggio_sandler", "R", -2.0), ("dimaggio_sandler", "nu", 0.5),
-    ("dimaggio_sandler", "hardening", "retreating"),
-])
-def test_invalid_parameters_name_the_parameter(name, key, value):
-    table = dict(VII5 if name == "modified_cap" else DS)
-    with pytest.raises(InputError, match=rf"materials\.soil\.{key}\b"):
-        from_table(MODELS[name], {**table, key: value}, "materials.soil")

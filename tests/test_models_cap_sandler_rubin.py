@@ -5,26 +5,24 @@ when the soil dilates) and its centre stays on the compression side,
 L = max(kappa, 0). Their uniaxial strain test of McCormick Ranch sand (issue
 12: at 0.5 % axial strain the published lateral stress is +0.003 ksi, and the
 cap that never retreats, from L = -0.133 ksi, gives -0.016 ksi and an axial
-stress 21 % higher), and the consistent tangent where the cap retreats, in
-each return mode it adds."""
+stress 21 % higher), and the bulk stiffness where the cap retreats, in each
+return mode it adds (the tangents: test_models_conformance.py)."""
 import dataclasses
 
 import numpy as np
 import pytest
 
-from conftest import central_differences
-
 from soilbin.models import DiMaggioSandler
-from soilbin.models.cap import CapHardening
+from soilbin.models.cap import MCCORMICK_RANCH, CapHardening
+from soilbin.params import from_table
 from soilbin.tensors import IDENTITY, deviator
 
-S_FAILURE, S_APEX, S_CAP, S_CAP_CORNER = 1.0, 2.0, 4.0, 5.0
+S_FAILURE, S_CAP, S_CAP_CORNER = 1.0, 4.0, 5.0
 
 #: McCormick Ranch sand (ksi, 1/ksi; Sandler & Rubin 1979): K = 66.67, G = 40
 #: (E = 100, nu = 0.25), W = 0.066, D = 0.67, R = 2.5, A = 0.25, C = 0.18,
 #: beta = 0.67, X0 = 0 (kappa0 = -0.133: the cap centre L = 0, the cap's end X = 0).
-SAND = DiMaggioSandler(E=100.0, nu=0.25, A=0.25, C=0.18, beta=0.67, R=2.5, W=0.066, D=0.67,
-                       hardening=CapHardening.VOLUMETRIC)
+SAND = DiMaggioSandler(**MCCORMICK_RANCH, hardening=CapHardening.VOLUMETRIC)
 NEVER_RETREATS = dataclasses.replace(SAND, hardening=CapHardening.CAP_COMPACTION)
 
 
@@ -91,28 +89,18 @@ def test_cap_retreats_to_the_compression_side_and_below():
     assert state["cap_L"][0] == 0.0 and state["cap_X"][0] == pytest.approx(0.0, abs=1e-12)
 
 
-def mode_points():
-    """(stress_n, deps, cap X_n, expected yield_state, dp/de_v > 0): the retreating
-    cap's return modes at the sand's scale (ksi), cap centre L = max(kappa(X_n), 0)."""
-    n = unit(5)
-    I = IDENTITY
-    return [(-0.1 * I, 2e-5 * I + 2e-3 * n, 1.0, S_FAILURE, True),    # the cap retreats
-            (-0.01 * I, 1e-4 * I + 3e-3 * n, 0.2, S_CAP_CORNER, True),  # the moving corner
-            (-0.01 * I, 5e-4 * I + 1e-2 * n, 0.2, S_CAP_CORNER, False),  # held at L = 0
-            (-0.01 * I, -3e-4 * I + 1e-4 * n, 0.1, S_CAP, True),      # kappa < 0: shrunken
-            (-0.01 * I, 1e-3 * I, 0.1, S_APEX, False)]                # lift at the apex
+#: The retreating cap's conformance samples (tangents against central differences:
+#: test_models_conformance.py) and whether dp/de_v > 0 there.
+STIFF = {"failure, the cap retreating": True, "moving cap corner": True,
+         "cap corner held at L = 0": False, "shrunken cap, kappa < 0": True,
+         "apex, lifted": False}
 
 
-@pytest.mark.parametrize("stress, deps, X_n, expected, stiff", mode_points())
-def test_tangent_matches_central_differences_where_the_cap_retreats(stress, deps, X_n,
-                                                                    expected, stiff):
-    model = dataclasses.replace(SAND, X0=1.0)
-    state = model.initial_state(1, stress)
-    state["cap_L"] = np.maximum(model.kappa(np.array([X_n])), model.L_min)
-    state["cap_X"] = np.array([X_n])
-    _, tangent, new = model.update(deps[None], state)
-    assert new["yield_state"][0] == expected
-    fd = central_differences(model, deps[None], state, 1e-9)
-    assert np.abs(fd - tangent).max() / np.abs(model.stiffness).max() < 1e-6
+def test_bulk_stiffness_where_the_cap_retreats():
     # The moving corner and the cap keep a bulk stiffness (the fixed corner had none).
-    assert (IDENTITY @ tangent[0] @ IDENTITY > 1e-9 * model.K) == stiff
+    samples = [s for s in DiMaggioSandler.conformance_samples() if s.mode in STIFF]
+    assert {s.mode for s in samples} == set(STIFF)
+    for sample in samples:
+        model = from_table(DiMaggioSandler, sample.table, "m")
+        _, tangent, _ = model.update(sample.deps[None], sample.state(model))
+        assert (IDENTITY @ tangent[0] @ IDENTITY > 1e-9 * model.K) == STIFF[sample.mode]

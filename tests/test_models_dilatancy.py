@@ -1,13 +1,12 @@
 """Drucker–Prager with a dilation angle psi (non-associated flow): the plastic
-strain follows the potential, the unsymmetric consistent tangent matches
-central differences on the cone, at the apex and at the cut-off corner, and
-psi = phi is the associated model bit for bit."""
+strain follows the potential, the consistent tangent is unsymmetric on the
+cone (it matches central differences in every return mode, with and without
+cut-off: test_models_conformance.py), and psi = phi is the associated model
+bit for bit."""
 import math
 
 import numpy as np
 import pytest
-
-from conftest import central_differences
 
 from soilbin.errors import InputError
 from soilbin.models import MODELS, DruckerPrager, Matching
@@ -40,39 +39,28 @@ def points(model):
     return deps, stress, np.array([S_ELASTIC, S_CONE, S_CONE, S_APEX])
 
 
-@pytest.mark.parametrize("matching", list(Matching), ids=lambda m: m.value)
-@pytest.mark.parametrize("psi", [0.0, 10.0, PHI])
-def test_tangent_matches_central_differences(psi, matching):
-    model = dp(psi, matching)
-    deps, stress, expected = points(model)
-    state = model.initial_state(len(deps), stress)
-    _, tangent, new = model.update(deps, state)
-    np.testing.assert_array_equal(new["yield_state"], expected)
-    fd = central_differences(model, deps, state, 1e-10)
-    scale = np.abs(model.stiffness).max()
-    assert np.abs(fd - tangent).max() / scale < 1e-6
-    asym = np.abs(tangent - np.swapaxes(tangent, 1, 2)).max(axis=(1, 2)) / scale
-    if psi < PHI:   # non-associated: the cone's tangent is unsymmetric
-        assert asym[1] > 1e-3 and asym[2] > 1e-3
-    else:
-        assert asym.max() < 1e-12
+def test_tangent_is_unsymmetric_on_the_cone_iff_non_associated():
+    # On the conformance samples (tangents against central differences, in every
+    # return mode: test_models_conformance.py).
+    for sample in MODELS["drucker_prager"].conformance_samples():
+        model = from_table(MODELS["drucker_prager"], sample.table, "m")
+        _, tangent, _ = model.update(sample.deps[None], sample.state(model))
+        asym = np.abs(tangent - np.swapaxes(tangent, 1, 2)).max() / np.abs(model.stiffness).max()
+        if model.psi == model.phi:
+            assert asym < 1e-12
+        elif sample.yield_state == S_CONE:
+            assert asym > 1e-3
 
 
-@pytest.mark.parametrize("psi", [0.0, 10.0])
-def test_tangent_with_cutoff_corner(psi):
-    """Cut-off p <= T below the apex: cone, cut-off and corner returns."""
-    model = dp(psi, tension_cutoff=0.1)
-    d = unit_deviators(4, 3)
-    deps = np.array([2e-3 * d[0] - 1e-4 * IDENTITY,
-                     3e-4 * IDENTITY + 1e-6 * d[1],
-                     3e-3 * IDENTITY + 3e-3 * d[2]])
-    stress = np.array([-2.0 * IDENTITY, np.zeros(6), np.zeros(6)])
-    state = model.initial_state(3, stress)
-    sigma, tangent, new = model.update(deps, state)
-    np.testing.assert_array_equal(new["yield_state"], [S_CONE, S_CUTOFF, S_APEX])
-    np.testing.assert_allclose(trace(sigma[1:]) / 3.0, 0.1, rtol=1e-13)
-    fd = central_differences(model, deps, state, 1e-10)
-    assert np.abs(fd - tangent).max() / np.abs(model.stiffness).max() < 1e-6
+def test_cutoff_and_corner_hold_the_mean_stress_at_the_cutoff():
+    samples = [s for s in MODELS["drucker_prager"].conformance_samples()
+               if s.table.get("psi", PHI) < PHI and "tension_cutoff" in s.table
+               and s.yield_state in (S_CUTOFF, S_APEX)]
+    assert len(samples) == 4
+    for sample in samples:
+        model = from_table(MODELS["drucker_prager"], sample.table, "m")
+        sigma, _, _ = model.update(sample.deps[None], sample.state(model))
+        assert trace(sigma)[0] / 3.0 == pytest.approx(model.tension_cutoff, rel=1e-13)
 
 
 @pytest.mark.parametrize("psi", [0.0, 10.0, 25.0])

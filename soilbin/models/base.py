@@ -5,6 +5,11 @@ updates the stress at many quadrature points at once. Its history at the
 points is a :data:`State`: a mapping name -> array of shape (n_points, ...),
 declared by the model's ``history`` and always holding ``"stress"`` (n, 6)
 in the Mandel convention of :mod:`soilbin.tensors`.
+
+Every model declares its :meth:`Model.conformance_samples`: one
+:class:`Sample` per return mode, which tests/test_models_conformance.py runs
+through the checks every model must pass (consistent tangent, inputs left
+alone, history shapes, parameter errors).
 """
 import abc
 import dataclasses
@@ -14,8 +19,52 @@ import numpy as np
 
 from ..errors import ReturnMapError
 from ..params import Params
+from ..tensors import deviator, trace
 
 State = dict[str, np.ndarray]
+
+#: A unit deviatoric direction with every component non-zero, for the samples.
+SHEAR = np.array([-0.09063425125224764, 0.19020462782182082, -0.09957037656957318,
+                  -0.7688048616632173, 0.5341197324107143, 0.26334116331748947])
+
+#: yield_state codes of every model (floats: the history arrays are float):
+#: elastic; on the failure (shear) surface - the cone, or for Cam-Clay the
+#: yield surface dry of critical (dilating); at the apex of the failure surface
+#: or its corner with the tension cut-off (for Cam-Clay: at the origin, sigma = 0);
+#: on the tension cut-off; on the cap, or for Cam-Clay on the yield surface wet
+#: of critical (compacting); at the corner of cap and failure surface; at the
+#: vertex of Cam-Clay on the mean-stress axis (p = p_c, q = 0).
+ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER, TIP = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
+
+
+def stress_invariants(stress):
+    """(p, s, |s|) of (n, 6) Mandel stresses: the mean stress p = tr(sigma) / 3
+    (tension positive; the invariant models negate it), the deviator s and its
+    norm |s| = sqrt(2 J2)."""
+    s = deviator(stress)
+    return trace(stress) / 3.0, s, np.linalg.norm(s, axis=-1)
+
+
+@dataclasses.dataclass(frozen=True)
+class Sample:
+    """One point of a model's conformance suite: from the committed ``stress``
+    (and ``history`` values besides :meth:`Model.initial_state`'s), the strain
+    increment ``deps`` lands in the return mode ``mode``, recorded as ``yield_state``."""
+
+    mode: str
+    table: dict            # the parameters, as a scene's TOML table
+    stress: np.ndarray     # (6,)
+    deps: np.ndarray       # (6,)
+    yield_state: float
+    history: dict = dataclasses.field(default_factory=dict)
+    fd_step: float = 1e-8  # central-difference step of the tangent check
+
+    def state(self, model):
+        """The committed history at one point for ``model`` (built from ``table``)."""
+        state = model.initial_state(1, self.stress)
+        for name, value in self.history.items():
+            state[name][:] = value
+        return state
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,6 +97,11 @@ class Model(Params, abc.ABC):
             raise ReturnMapError(f"{type(self).__name__}: local stress update failed "
                                  f"(non-finite result) at {failed} of {len(ok)} points")
         return sigma, tangent, new_state
+
+    @classmethod
+    def conformance_samples(cls) -> list[Sample]:
+        """At least one :class:`Sample` per return mode of the model."""
+        raise NotImplementedError(f"{cls.__name__} declares no conformance samples")
 
     @abc.abstractmethod
     def integrate(self, deps, state):

@@ -82,7 +82,7 @@ History: ``stress``, ``cap_L``, ``cap_X`` (compression-positive I1),
 ``eps_p_vol`` (trace of the plastic strain, tension positive), ``eps_p_eq``
 and ``yield_state``: 0 elastic, 1 failure surface, 2 apex or corner of
 failure surface and cut-off, 3 cut-off, 4 cap, 5 corner of cap and failure
-surface (codes of :mod:`.invariant_return`).
+surface (codes of :mod:`.base`).
 """
 import abc
 import dataclasses
@@ -92,15 +92,19 @@ import math
 import numpy as np
 
 from ..params import param
+from ..tensors import IDENTITY
+from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
 from .cone import tension_cutoff_param
 from .elastic import IsotropicElasticity
-from .invariant_return import (APEX, CAP, CAP_CORNER, CUTOFF, FAILURE, YIELD_TOL, LinearBulk,
-                               Response, Trial, check_converged, invariants, scalar_root,
-                               smooth_return)
+from .invariant_return import (YIELD_TOL, Response, Surface, Trial, check_converged, invariants,
+                               scalar_root, smooth_return)
 
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
                 "R": 2.0, "W": 0.18, "D": 0.05}
+#: McCormick Ranch sand (ksi, 1/ksi; Sandler & Rubin 1979): K = 66.67, G = 40.
+MCCORMICK_RANCH = {"E": 100.0, "nu": 0.25, "A": 0.25, "C": 0.18, "beta": 0.67, "R": 2.5,
+                   "W": 0.066, "D": 0.67}
 
 
 class CapHardening(enum.Enum):
@@ -240,7 +244,7 @@ class CapModel(IsotropicElasticity):
 
     def integrate(self, deps, state):
         G, K, R = self.G, self.K, self.R
-        bulk = LinearBulk(K)
+        bulk = self.bulk
         trial = Trial.split(deps, state["stress"], G)
         p_n, de_v, J_tr = trial.p_n, trial.de_v, trial.J_tr
         L_n, X_n = state["cap_L"], state["cap_X"]
@@ -401,10 +405,10 @@ class CapModel(IsotropicElasticity):
             r3 = rho**3
             height = np.where(free, F, (kappa - L_min) / R + F)
             f_h = np.where(free, -a / (R * rho) - dF, -1.0 / R - dF)
-            return (rho - height, 3.0 * a / (R * rho), J / rho, f_h,
-                    9.0 * J**2 / (R**2 * r3), -3.0 * a * J / (R * r3), a**2 / r3,
-                    np.where(free, -3.0 * J**2 / (R**2 * r3), 0.0),
-                    np.where(free, a * J / (R * r3), 0.0), scale[k])
+            return Surface(f=rho - height, f_p=3.0 * a / (R * rho), f_J=J / rho, f_h=f_h,
+                           f_pp=9.0 * J**2 / (R**2 * r3), f_pJ=-3.0 * a * J / (R * r3),
+                           f_JJ=a**2 / r3, f_ph=np.where(free, -3.0 * J**2 / (R**2 * r3), 0.0),
+                           f_Jh=np.where(free, a * J / (R * r3), 0.0), scale=scale[k])
 
         def admissible(p, J, kappa, k):
             # A cap of positive size; without the retreat kappa never goes below L_min.
@@ -426,6 +430,47 @@ class CapModel(IsotropicElasticity):
         return kappa
 
 
+def cap_samples(table, cohesive):
+    """Conformance samples of a cap model from its parameter tables with X0 = 20:
+    ``table`` with the apex at I1 = 0 (A = C) and no cut-off, ``cohesive`` with
+    the apex in tension and a cut-off below it; each with both hardenings."""
+    n, I = SHEAR, IDENTITY
+    # (mode, compression-positive p_n, deps, yield_state)
+    plain = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
+             ("failure", 3.0, 2e-3 * n, FAILURE),
+             ("apex", 0.5, 1e-2 * I + 1e-4 * n, APEX),
+             ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
+             ("cap corner", 3.85, 1e-2 * n, CAP_CORNER)]       # I1_n = 11.55 just below L
+    cut = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
+           ("failure", 1.0, 2e-3 * n, FAILURE),
+           ("cut-off", 0.0, 3e-4 * I + 1e-5 * n, CUTOFF),
+           ("corner", 0.0, 3e-3 * I + 3e-3 * n, APEX),           # failure surface / cut-off
+           ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
+           ("cap corner", 2.8, 1e-2 * n, CAP_CORNER)]
+    return [Sample(mode, {**t, "hardening": h.value}, -p * I, deps, code)
+            for h in CapHardening for t, cases in ((table, plain), (cohesive, cut))
+            for mode, p, deps, code in cases]
+
+
+def retreating_samples(cls):
+    """Conformance samples of the retreating cap at the sand's scale (ksi), from
+    the cap end X_n (the centre L = max(kappa(X_n), 0)): the return modes the
+    retreat adds."""
+    table = {**MCCORMICK_RANCH, "X0": 1.0, "hardening": CapHardening.VOLUMETRIC.value}
+    sand = cls(**{**table, "hardening": CapHardening.VOLUMETRIC})
+    n, I = SHEAR, IDENTITY
+    # (mode, compression-positive p_n, deps, X_n, yield_state)
+    cases = [("failure, the cap retreating", 0.1, 2e-5 * I + 2e-3 * n, 1.0, FAILURE),
+             ("moving cap corner", 0.01, 1e-4 * I + 3e-3 * n, 0.2, CAP_CORNER),
+             ("cap corner held at L = 0", 0.01, 5e-4 * I + 1e-2 * n, 0.2, CAP_CORNER),
+             ("shrunken cap, kappa < 0", 0.01, -3e-4 * I + 1e-4 * n, 0.1, CAP),
+             ("apex, lifted", 0.01, 1e-3 * I, 0.1, APEX)]
+    return [Sample(mode, table, -p * I, deps, code,
+                   {"cap_L": max(float(sand.kappa(np.array([X]))[0]), sand.L_min), "cap_X": X},
+                   fd_step=1e-9)
+            for mode, p, deps, X, code in cases]
+
+
 @dataclasses.dataclass(frozen=True)
 class DiMaggioSandler(CapModel):
     """DiMaggio–Sandler cap: F(I1) = A - C exp(-beta I1) (eq. B.9; module doc)."""
@@ -435,6 +480,12 @@ class DiMaggioSandler(CapModel):
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)
         return self.A - e, self.beta * e, -self.beta**2 * e
+
+    @classmethod
+    def conformance_samples(cls):
+        table = {k: v for k, v in SECTION_VII5.items() if k != "B"} | {"X0": 20.0}
+        return (cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 1.0})
+                + retreating_samples(cls))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -451,3 +502,8 @@ class ModifiedCap(CapModel):
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)
         return self.A + self.B * I1 - e, self.B + self.beta * e, -self.beta**2 * e
+
+    @classmethod
+    def conformance_samples(cls):
+        table = {**SECTION_VII5, "X0": 20.0}
+        return cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 0.5})

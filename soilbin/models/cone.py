@@ -51,13 +51,10 @@ import math
 import numpy as np
 
 from ..params import param
-from ..tensors import IDENTITY, P_DEV, SQRT2, deviator, trace
+from ..tensors import IDENTITY, P_DEV, SQRT2
+from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample, stress_invariants
 from .elastic import IsotropicElasticity, elastic_stiffness
 
-#: yield_state values: elastic, on the cone, at the apex or (with an active
-#: tension cut-off) at the corner of cone and cut-off, on the cut-off p = T.
-ELASTIC, SURFACE, APEX, CUTOFF = 0.0, 1.0, 2.0, 3.0
-CORNER = APEX
 #: Trial states with f_tr below this fraction of the stress scale are elastic.
 YIELD_TOL = 1e-12
 
@@ -79,9 +76,7 @@ def return_map(sigma_tr, K, G, eta, k, tension_cutoff=math.inf, eta_g=None):
     (eta, k) with the flow potential's slope ``eta_g`` (default eta: associated),
     optionally cut off at the mean stress p = ``tension_cutoff``."""
     eta_g = eta if eta_g is None else eta_g
-    p_tr = trace(sigma_tr) / 3.0
-    s_tr = deviator(sigma_tr)
-    s_norm = np.linalg.norm(s_tr, axis=-1)
+    p_tr, s_tr, s_norm = stress_invariants(sigma_tr)
     J_tr = s_norm / SQRT2
     f_tr = J_tr + eta * p_tr - k
     plastic = f_tr > YIELD_TOL * (k + J_tr + eta * np.abs(p_tr))
@@ -108,7 +103,7 @@ def return_map(sigma_tr, K, G, eta, k, tension_cutoff=math.inf, eta_g=None):
                                        G * dgamma[cone] / J_tr[cone], K, G, eta, eta_g)
     tangent[apex] = 0.0   # perfect plasticity: the apex stress k/eta is fixed
 
-    yield_state = np.where(apex, APEX, np.where(cone, SURFACE, ELASTIC))
+    yield_state = np.where(apex, APEX, np.where(cone, FAILURE, ELASTIC))
     return sigma, tangent, yield_state
 
 
@@ -137,7 +132,7 @@ def _cutoff_return_map(sigma_tr, p_tr, s_tr, s_norm, J_tr, f_tr, plastic, K, G, 
                        * (P_DEV - n[:, :, None] * n[:, None, :]))
     tangent[cut] = 2.0 * G * P_DEV   # p = T is fixed, s = s_tr
 
-    yield_state = np.select([cone, corner, cut], [SURFACE, CORNER, CUTOFF], ELASTIC)
+    yield_state = np.select([cone, corner, cut], [FAILURE, APEX, CUTOFF], ELASTIC)
     return sigma, tangent, yield_state
 
 
@@ -161,14 +156,29 @@ def consistent_tangent(n, ratio, K, G, eta, eta_g=None):
             - b_g[:, :, None] * b_f[:, None, :] / (G + K * eta * eta_g))
 
 
+def cone_samples(tables, cut_tables, apex=True):
+    """Conformance samples of a cone model from its parameter tables: ``tables``
+    without a cut-off (and with an ``apex``: eta > 0), ``cut_tables`` with one below the apex."""
+    n, I, stressed, free = SHEAR, IDENTITY, -200.0 * IDENTITY, np.zeros(6)
+    inside = [("elastic", stressed, 1e-4 * n - 1e-4 * I, ELASTIC),
+              ("cone", stressed, 2e-2 * n - 1e-3 * I, FAILURE)]
+    beyond = [("apex", free, 5e-2 * I + 1e-4 * n, APEX)] if apex else []
+    cut = [("cut-off", free, 3e-3 * I + 1e-4 * n, CUTOFF),
+           ("corner", free, 5e-2 * I + 2e-2 * n, APEX)]
+    cases = ([(t, inside + beyond) for t in tables]
+             + [(t, inside + cut) for t in cut_tables])
+    return [Sample(mode, t, stress, deps, code, fd_step=1e-9)
+            for t, modes in cases for mode, stress, deps, code in modes]
+
+
 @dataclasses.dataclass(frozen=True)
 class ConeModel(IsotropicElasticity):
     """Base of the cone models; a subclass gives its ``cone`` (eta, k) and may
     declare the field ``tension_cutoff: float = tension_cutoff_param()`` after
     its fields without a default (else it has no cut-off).
 
-    History ``yield_state``: 0 elastic, 1 on the cone, 2 at the apex or at the
-    corner of cone and tension cut-off, 3 on the tension cut-off p = T.
+    History ``yield_state`` (codes of :mod:`.base`): FAILURE on the cone, APEX at
+    the apex or at the corner of cone and tension cut-off, CUTOFF on the cut-off p = T.
     """
 
     history = {"stress": (6,), "eps_p_eq": (), "yield_state": ()}

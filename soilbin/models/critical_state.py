@@ -59,7 +59,7 @@ of the plastic strain, tension positive as every strain in the code),
 ``eps_p_eq`` (sqrt(2/3) |eps_p| accumulated) and ``yield_state``: 0
 elastic, 1 on the yield surface dry of critical (dilating), 2 at the origin
 (Cam-Clay), 4 on the yield surface wet of critical (compacting), 6 at the
-Cam-Clay tip (codes of :mod:`.invariant_return`).
+Cam-Clay tip (codes of :mod:`.base`).
 """
 import dataclasses
 import enum
@@ -69,9 +69,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..params import param
-from .elastic import IsotropicElasticity
-from .invariant_return import (APEX, CAP, FAILURE, TIP, YIELD_TOL, ExponentialBulk,
-                               LinearBulk, Response, Trial, check_converged, invariants,
+from ..tensors import IDENTITY
+from .base import APEX, CAP, ELASTIC, FAILURE, SHEAR, TIP, Sample
+from .elastic import ExponentialBulk, IsotropicElasticity, LinearBulk
+from .invariant_return import (YIELD_TOL, Response, Surface, Trial, check_converged, invariants,
                                scalar_root, smooth_return)
 
 SQRT3 = math.sqrt(3.0)
@@ -148,7 +149,7 @@ class CriticalStateModel(IsotropicElasticity):
 
     @property
     def bulk(self):
-        """The volumetric elastic law."""
+        """The volumetric elastic law (``elasticity``)."""
         if self.elasticity is CriticalStateElasticity.LINEAR:
             return LinearBulk(self.K)
         return ExponentialBulk(self.kappa / (1.0 + self.e0), self.p_min)
@@ -160,7 +161,7 @@ class CriticalStateModel(IsotropicElasticity):
         raise NotImplementedError
 
     def surface(self, p, J, y, pc_n, f_scale):
-        """(f, f_p, f_J, f_y, f_pp, f_pJ, f_JJ, f_py, f_Jy, f_scale) at p_c = pc_n exp(y)."""
+        """The :class:`.invariant_return.Surface` at p_c = pc_n exp(y) (h = y)."""
         raise NotImplementedError
 
     def yield_pressure(self, p, J):
@@ -241,9 +242,37 @@ class CriticalStateModel(IsotropicElasticity):
                              axis=1)
 
 
+#: A lightly overconsolidated clay (kPa): M = 1.2, the conformance samples' parameters.
+SAMPLE_CLAY = {"E": 1.0e4, "nu": 0.3, "phi": 30.0, "lam": 0.2, "kappa": 0.04, "e0": 1.0,
+               "p_c0": 1.0}
+
+
+def critical_state_samples(tip, tension):
+    """Conformance samples with p_c,n = 100 for either elasticity; ``tip`` and
+    ``tension`` are the (mode, yield_state) of a trial beyond the tip and, with
+    linear elasticity (the kappa-line with p_min = 0 carries no tension), of a
+    tensile trial: Cam-Clay's vertices."""
+    n, I = SHEAR, IDENTITY
+    # (mode, compression-positive p_n, deps, yield_state)
+    cases = [("elastic", 60.0, 1e-4 * n - 1e-4 * I, ELASTIC),
+             ("wet", 100.0, -2e-3 * I + 1e-2 * n, CAP),          # compacting
+             ("dry", 30.0, 1e-2 * n + 1e-4 * I, FAILURE),        # dilating
+             (tip[0], 100.0, -5e-3 * I + 2e-5 * n, tip[1])]
+    tensile = [(tension[0], 10.0, 5e-2 * I + 1e-7 * n, tension[1])]
+    linear = CriticalStateElasticity.LINEAR
+    return [Sample(mode, {**SAMPLE_CLAY, "elasticity": e.value}, -p * I, deps, code,
+                   {"p_c": 100.0})
+            for e in CriticalStateElasticity
+            for mode, p, deps, code in cases + (tensile if e is linear else [])]
+
+
 @dataclasses.dataclass(frozen=True)
 class ModifiedCamClay(CriticalStateModel):
     """Modified Cam-Clay, f = q^2 + M^2 p (p - p_c) (eq. B.7; module doc)."""
+
+    @classmethod
+    def conformance_samples(cls):
+        return critical_state_samples(("wet", CAP), ("dry", FAILURE))
 
     def yield_value(self, p, J, p_c):
         return 3.0 * J**2 + self.M**2 * p * (p - p_c)
@@ -258,9 +287,10 @@ class ModifiedCamClay(CriticalStateModel):
         rho = np.sqrt(a**2 + b2)
         r3 = rho**3
         f_pc = -0.5 * (a / rho + 1.0)
-        return (rho - 0.5 * pc, a / rho, 3.0 * J / (M2 * rho), f_pc * pc,
-                b2 / r3, -3.0 * a * J / (M2 * r3), 3.0 * a**2 / (M2 * r3),
-                -0.5 * b2 / r3 * pc, 1.5 * a * J / (M2 * r3) * pc, f_scale)
+        return Surface(f=rho - 0.5 * pc, f_p=a / rho, f_J=3.0 * J / (M2 * rho), f_h=f_pc * pc,
+                       f_pp=b2 / r3, f_pJ=-3.0 * a * J / (M2 * r3), f_JJ=3.0 * a**2 / (M2 * r3),
+                       f_ph=-0.5 * b2 / r3 * pc, f_Jh=1.5 * a * J / (M2 * r3) * pc,
+                       scale=f_scale)
 
     def yield_pressure(self, p, J):
         return p + 3.0 * J**2 / (self.M**2 * p)
@@ -277,6 +307,10 @@ class CamClay(CriticalStateModel):
     """Original Cam-Clay, f = q + M p ln(p / p_c) (eq. B.6; module doc), with
     its vertices at the tip (p_c, 0) and at the origin."""
 
+    @classmethod
+    def conformance_samples(cls):
+        return critical_state_samples(("tip", TIP), ("origin", APEX))
+
     @property
     def log_shift(self):
         return 0.0   # ln p: the flow direction is singular at p = 0
@@ -291,8 +325,9 @@ class CamClay(CriticalStateModel):
         M = self.M
         log_ratio = np.log(p / pc_n) - y
         zero = np.zeros_like(p)
-        return (SQRT3 * J + M * p * log_ratio, M * (log_ratio + 1.0), np.full_like(p, SQRT3),
-                -M * p, M / p, zero, zero, np.full_like(p, -M), zero, f_scale)
+        return Surface(f=SQRT3 * J + M * p * log_ratio, f_p=M * (log_ratio + 1.0),
+                       f_J=np.full_like(p, SQRT3), f_h=-M * p, f_pp=M / p, f_pJ=zero, f_JJ=zero,
+                       f_ph=np.full_like(p, -M), f_Jh=zero, scale=f_scale)
 
     def yield_pressure(self, p, J):
         return p * np.exp(np.minimum(SQRT3 * J / (self.M * p), 700.0))

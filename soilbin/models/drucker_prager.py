@@ -3,9 +3,13 @@ with a dilation angle psi for non-associated flow."""
 import dataclasses
 import math
 
+import numpy as np
+
 from ..errors import InputError
 from ..params import param
-from .cone import ConeModel, tension_cutoff_param
+from ..tensors import IDENTITY
+from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
+from .cone import ConeModel, cone_samples, tension_cutoff_param
 from .matching import Matching
 
 
@@ -41,3 +45,31 @@ class DruckerPrager(ConeModel):
     @property
     def flow_slope(self):
         return 3.0 * self.matching.coefficients(self.c, self.psi)[0]
+
+    @classmethod
+    def conformance_samples(cls):
+        # The apex k / eta = 866 for either matching; cut-offs below it.
+        compression, plane = ({"E": 1.0e5, "nu": 0.3, "c": 500.0, "phi": 30.0, "matching": m.value}
+                              for m in Matching)
+        return (cone_samples([compression, plane], [{**compression, "tension_cutoff": 100.0},
+                                                    {**plane, "tension_cutoff": 0.0}])
+                + dilatancy_samples())
+
+
+def dilatancy_samples():
+    """Conformance samples of non-associated flow at a low confinement: psi = 0,
+    10 and phi with either matching, psi = 0 and 10 with a cut-off below the apex."""
+    n, I, low, free = SHEAR, IDENTITY, -2.0 * IDENTITY, np.zeros(6)
+    soil = {"E": 4000.0, "nu": 0.35, "c": 0.5, "phi": 33.0}
+    cone = ("cone", low, 2e-3 * n - 1e-4 * I, FAILURE)
+    plain = [("elastic", low, 1e-5 * n - 1e-5 * I, ELASTIC), cone,
+             ("cone near the apex", low, 2e-3 * n + 2e-4 * I, FAILURE),
+             ("apex", free, 2e-3 * I + 1e-5 * n, APEX)]
+    cut = [cone, ("cut-off", free, 3e-4 * I + 1e-6 * n, CUTOFF),
+           ("corner", free, 3e-3 * I + 3e-3 * n, APEX)]
+    cases = ([({**soil, "matching": m.value, "psi": psi}, plain)
+              for psi in (0.0, 10.0, soil["phi"]) for m in Matching]
+             + [({**soil, "matching": Matching.COMPRESSION_CONE.value, "psi": psi,
+                  "tension_cutoff": 0.1}, cut) for psi in (0.0, 10.0)])
+    return [Sample(mode, t, stress, deps, code, fd_step=1e-10)
+            for t, modes in cases for mode, stress, deps, code in modes]

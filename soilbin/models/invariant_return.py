@@ -13,8 +13,8 @@ an associated return with isotropic elasticity and a yield function of
 (p, J) keeps the deviatoric direction of the trial stress, so every local
 problem is one in the (p, J) plane.
 
-Elasticity (:class:`LinearBulk`, :class:`ExponentialBulk`): a constant
-shear modulus G, so J_tr = |s_n + 2G dev(deps)| / sqrt2, and a volumetric
+Elasticity (the model's ``bulk``: :class:`.elastic.LinearBulk`,
+:class:`.elastic.ExponentialBulk`): a constant shear modulus G, so J_tr = |s_n + 2G dev(deps)| / sqrt2, and a volumetric
 law written through the elastic volumetric strain E(p; p_n) that takes the
 mean stress from p_n to p (linear: (p - p_n)/K; exponential, the
 kappa-line of critical-state soil mechanics: kappa* ln((p + p_min)/(p_n + p_min))).
@@ -30,8 +30,10 @@ one scalar hardening variable h (:func:`smooth_return`, backward Euler):
     r_h = r_h(h, dgamma f_p)                 hardening driven by the plastic compaction
 
 (dgamma f_p is the plastic compaction, dgamma f_J the plastic shear strain
-conjugate to J; dgamma >= 0 at a solution.) It is solved by :func:`newton`, a Newton iteration with a
-backtracking line search on the scaled residual, vectorised over points.
+conjugate to J; dgamma >= 0 at a solution.) A model gives f and its
+derivatives as a :class:`Surface`; the residual and its Jacobian are those of
+:class:`LocalProblem`. It is solved by :func:`newton`, a Newton iteration with
+a backtracking line search on the scaled residual, vectorised over points.
 The converged Jacobian gives, by the implicit-function theorem, the
 sensitivities of (p, J) to the two inputs (de_v, J_tr), and with them the
 consistent tangent (:func:`invariant_tangent`)
@@ -63,15 +65,8 @@ import numpy as np
 
 from ..errors import ReturnMapError
 from ..tensors import IDENTITY, P_DEV, SQRT2, deviator, trace
+from .base import ELASTIC, stress_invariants
 
-#: yield_state codes shared by the soil models (0-3 as the cone models):
-#: elastic; on the failure (shear) surface, or for Cam-Clay on the yield
-#: surface dry of critical (dilating); at the apex of the failure surface or
-#: its corner with the tension cut-off (for Cam-Clay: at the origin, sigma = 0);
-#: on the tension cut-off; on the cap, or for Cam-Clay on the yield surface
-#: wet of critical (compacting); at the corner of cap and failure surface;
-#: at the vertex of Cam-Clay on the mean-stress axis (p = p_c, q = 0).
-ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER, TIP = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
 #: Trial states with f_tr below this fraction of the stress scale are elastic.
 YIELD_TOL = 1e-12
 #: Local Newton: tolerance on the scaled residual, iterations, line-search halvings.
@@ -80,47 +75,6 @@ MAX_ITERATIONS = 60
 MAX_HALVINGS = 40
 #: Residual a stalled line search still accepts as converged (rounding floor).
 STALL_TOL = 1e-10
-
-
-class LinearBulk:
-    """p = p_n + K e: constant bulk modulus."""
-
-    def __init__(self, K):
-        self.K = K
-
-    def pressure(self, p_n, e):
-        return p_n + self.K * e
-
-    def strain(self, p, p_n):
-        """Elastic volumetric strain (compression positive) taking p_n to p."""
-        return (p - p_n) / self.K
-
-    def compliance(self, p):
-        """dE/dp = 1 / K(p)."""
-        return np.full(np.shape(p), 1.0 / self.K)
-
-    def admissible(self, p):
-        return np.isfinite(p)
-
-
-class ExponentialBulk:
-    """K = (p + p_min) / kappa_star, integrated exactly over a step:
-    p + p_min = (p_n + p_min) exp(e / kappa_star)."""
-
-    def __init__(self, kappa_star, p_min):
-        self.kappa_star, self.p_min = kappa_star, p_min
-
-    def pressure(self, p_n, e):
-        return (p_n + self.p_min) * np.exp(np.minimum(e / self.kappa_star, 700.0)) - self.p_min
-
-    def strain(self, p, p_n):
-        return self.kappa_star * np.log((p + self.p_min) / (p_n + self.p_min))
-
-    def compliance(self, p):
-        return self.kappa_star / (p + self.p_min)
-
-    def admissible(self, p):
-        return p + self.p_min > 0.0
 
 
 @dataclasses.dataclass
@@ -136,17 +90,18 @@ class Trial:
 
     @classmethod
     def split(cls, deps, stress_n, G):
-        s_n = deviator(stress_n)
+        p_n, s_n, _ = stress_invariants(stress_n)
         s_tr = s_n + 2.0 * G * deviator(deps)
         s_norm = np.linalg.norm(s_tr, axis=-1)
         n = s_tr / np.where(s_norm > 0.0, s_norm, 1.0)[:, None]
-        return cls(-trace(stress_n) / 3.0, -trace(deps), s_n, s_tr, s_norm / SQRT2, n)
+        return cls(-p_n, -trace(deps), s_n, s_tr, s_norm / SQRT2, n)
 
 
 def invariants(stress):
-    """(p, J) of (n, 6) stresses, compression-positive p."""
-    s = deviator(stress)
-    return -trace(stress) / 3.0, np.sqrt(0.5 * np.sum(s * s, axis=-1))
+    """(p, J) of (n, 6) stresses, compression-positive p (J as sqrt(s:s / 2), the
+    initial states' numbers)."""
+    p, s, _ = stress_invariants(stress)
+    return -p, np.sqrt(0.5 * np.sum(s * s, axis=-1))
 
 
 class Response:
@@ -316,94 +271,141 @@ def scalar_root(fun, lo, hi, x0=None):
     return x, converged
 
 
+@dataclasses.dataclass(frozen=True)
+class Surface:
+    """A smooth yield surface f(p, J, h) (and, the flow being associated, the flow
+    potential) at some points: its value and the derivatives the local Newton
+    needs in p, J and the hardening variable h, and the stress scale of f."""
+
+    f: np.ndarray
+    f_p: np.ndarray
+    f_J: np.ndarray
+    f_h: np.ndarray
+    f_pp: np.ndarray
+    f_pJ: np.ndarray
+    f_JJ: np.ndarray
+    f_ph: np.ndarray
+    f_Jh: np.ndarray
+    scale: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class LocalProblem:
+    """The local problem of the module doc at the points ``idx`` (see
+    :func:`smooth_return` for the arguments); positions ``sel``, ``k`` are in ``idx``."""
+
+    surface: object
+    hardening: object
+    bulk: object
+    G: float
+    trial: Trial
+    idx: np.ndarray
+    h_n: np.ndarray
+    stress_scale: np.ndarray
+    strain_row: np.ndarray      # strain residual -> relative
+    h_row: np.ndarray
+    log_shift: object = None
+    admissible: object = None
+
+    def pressure(self, xi):
+        """(p, dp/dxi) of the Newton's pressure variable."""
+        if self.log_shift is not None:
+            e = np.exp(xi)
+            return e - self.log_shift, e
+        return xi, np.ones_like(xi)
+
+    def system(self, de_in, J_in, sel):
+        """(evaluate, admissible) of :func:`newton` for the points sel with the
+        inputs de_in, J_in (aligned with sel)."""
+        t, bulk, G = self.trial, self.bulk, self.G
+        p_n = t.p_n[self.idx]
+
+        def evaluate(x, kk):
+            k = sel[kk]
+            xi, J, dg, h = x.T
+            p, dp = self.pressure(xi)
+            s = self.surface(p, J, h, k)
+            rh, rh_h, rh_c = self.hardening(h, dg * s.f_p, k)
+            c = bulk.compliance(p)
+            r = np.stack([bulk.strain(p, p_n[k]) - de_in[kk] + dg * s.f_p,
+                          (J - J_in[kk]) / G + dg * s.f_J,
+                          s.f,
+                          rh], axis=1)
+            jac = np.empty((len(k), 4, 4))
+            jac[:, 0] = np.stack([(c + dg * s.f_pp) * dp, dg * s.f_pJ, s.f_p, dg * s.f_ph], axis=1)
+            jac[:, 1] = np.stack([dg * s.f_pJ * dp, 1.0 / G + dg * s.f_JJ, s.f_J, dg * s.f_Jh],
+                                 axis=1)
+            jac[:, 2] = np.stack([s.f_p * dp, s.f_J, np.zeros_like(s.f_p), s.f_h], axis=1)
+            jac[:, 3] = np.stack([rh_c * dg * s.f_pp * dp, rh_c * dg * s.f_pJ, rh_c * s.f_p,
+                                  rh_h + rh_c * dg * s.f_ph], axis=1)
+            scale = np.stack([self.strain_row[k], self.strain_row[k], 1.0 / s.scale,
+                              self.h_row[k]], axis=1)
+            return r * scale, jac * scale[:, :, None]
+
+        def ok(x, kk):
+            xi, J, _, h = x.T
+            p = self.pressure(xi)[0]
+            good = bulk.admissible(p)
+            return good if self.admissible is None else good & self.admissible(p, J, h, sel[kk])
+        return evaluate, ok
+
+    def solution(self, x, sel):
+        """Roots that are solutions: J >= 0 and dgamma >= 0 up to rounding."""
+        t, i = self.trial, self.idx[sel]
+        return ((x[:, 1] >= -NEWTON_TOL * self.stress_scale[sel])
+                & (x[:, 2] >= -NEWTON_TOL * (np.abs(t.de_v[i]) + t.J_tr[i] / self.G)))
+
+    def trial_path(self, t, sel):
+        """(de_v, J_tr, xi_tr) of the points sel at the fraction t of the step."""
+        tr, i = self.trial, self.idx[sel]
+        s = tr.s_n[i] + t[:, None] * (tr.s_tr[i] - tr.s_n[i])
+        p = self.bulk.pressure(tr.p_n[i], t * tr.de_v[i])
+        xi = p if self.log_shift is None else np.log(p + self.log_shift)
+        return t * tr.de_v[i], np.linalg.norm(s, axis=1) / SQRT2, xi
+
+    def f_path(self, t, sel):
+        """f at the fraction t of the trial path, with the committed hardening."""
+        _, J, xi = self.trial_path(t, sel)
+        return self.surface(self.pressure(xi)[0], J, self.h_n[sel], sel).f
+
+
 def smooth_return(surface, hardening, bulk, G, trial, idx, p_tr, h_n, x0, stress_scale,
                   log_shift=None, admissible=None, hardening_row=None):
     """Backward-Euler return of the points ``idx`` onto one smooth hardening
     surface (the local problem of the module doc).
 
-    ``surface(p, J, h, k)`` -> (f, f_p, f_J, f_h, f_pp, f_pJ, f_JJ, f_ph, f_Jh, f_scale)
-    for the points ``idx[k]``; ``hardening(h, c, k)`` -> (r_h, dr_h/dh, dr_h/dc), the
-    hardening residual with the compaction c = dgamma f_p of the step;
-    ``x0`` (m, 4) the starting (xi, J, dgamma, h), where p = exp(xi) - log_shift
-    if ``log_shift`` is a number (a logarithmic pressure variable: Cam-Clay's
-    ln p, or ln(p + p_min) of the exponential bulk law, in which the
-    volumetric residual is linear) and p = xi if it is None; ``stress_scale``
-    (m,) scales the strain residuals, ``hardening_row`` (m,) the hardening
-    residual (default: as a strain). Points where Newton fails from ``x0`` are
-    solved by continuation (:func:`_continuation`); a root with dgamma < 0 or
-    J < 0 is no solution. Returns (p, J, dgamma, h, (p_e, p_J, J_e, J_J), converged).
+    ``surface(p, J, h, k)`` -> :class:`Surface` for the points ``idx[k]``;
+    ``hardening(h, c, k)`` -> (r_h, dr_h/dh, dr_h/dc), the hardening residual
+    with the compaction c = dgamma f_p of the step; ``x0`` (m, 4) the starting
+    (xi, J, dgamma, h), where p = exp(xi) - log_shift if ``log_shift`` is a
+    number (a logarithmic pressure variable: Cam-Clay's ln p, or ln(p + p_min)
+    of the exponential bulk law, in which the volumetric residual is linear)
+    and p = xi if it is None; ``admissible(p, J, h, k)`` where iterates may go
+    (beyond the bulk law's range); ``stress_scale`` (m,) scales the strain
+    residuals, ``hardening_row`` (m,) the hardening residual (default: as a
+    strain). Points where Newton fails from ``x0`` are solved by continuation
+    (:func:`_continuation`); a root with dgamma < 0 or J < 0 is no solution.
+    Returns (p, J, dgamma, h, (p_e, p_J, J_e, J_J), converged).
     """
     m = len(idx)
-    de_v, J_tr, p_n = trial.de_v[idx], trial.J_tr[idx], trial.p_n[idx]
     with np.errstate(all="ignore"):
         K_ref = np.where(bulk.admissible(p_tr), 1.0 / bulk.compliance(p_tr), 0.0)
-    strain_row = np.maximum(K_ref, G) / stress_scale      # strain residual -> relative
-    h_row = strain_row if hardening_row is None else hardening_row
-
-    def pressure(xi):
-        if log_shift is not None:
-            e = np.exp(xi)
-            return e - log_shift, e
-        return xi, np.ones_like(xi)
-
-    def system(de_in, J_in, sel):
-        """(evaluate, admissible) for the points sel (positions in idx) with inputs
-        de_in, J_in (aligned with sel)."""
-        def evaluate(x, kk):
-            k = sel[kk]
-            xi, J, dg, h = x.T
-            p, dp = pressure(xi)
-            f, fp, fJ, fh, fpp, fpJ, fJJ, fph, fJh, f_scale = surface(p, J, h, k)
-            rh, rh_h, rh_c = hardening(h, dg * fp, k)
-            c = bulk.compliance(p)
-            r = np.stack([bulk.strain(p, p_n[k]) - de_in[kk] + dg * fp,
-                          (J - J_in[kk]) / G + dg * fJ,
-                          f,
-                          rh], axis=1)
-            jac = np.empty((len(k), 4, 4))
-            jac[:, 0] = np.stack([(c + dg * fpp) * dp, dg * fpJ, fp, dg * fph], axis=1)
-            jac[:, 1] = np.stack([dg * fpJ * dp, 1.0 / G + dg * fJJ, fJ, dg * fJh], axis=1)
-            jac[:, 2] = np.stack([fp * dp, fJ, np.zeros_like(fp), fh], axis=1)
-            jac[:, 3] = np.stack([rh_c * dg * fpp * dp, rh_c * dg * fpJ, rh_c * fp,
-                                  rh_h + rh_c * dg * fph], axis=1)
-            scale = np.stack([strain_row[k], strain_row[k], 1.0 / f_scale, h_row[k]], axis=1)
-            return r * scale, jac * scale[:, :, None]
-
-        def ok(x, kk):
-            xi, J, _, h = x.T
-            p = pressure(xi)[0]
-            good = bulk.admissible(p)
-            return good if admissible is None else good & admissible(p, J, h, sel[kk])
-        return evaluate, ok
-
-    def solution(x, sel):
-        """Roots that are solutions: J >= 0 and dgamma >= 0 up to rounding."""
-        return ((x[:, 1] >= -NEWTON_TOL * stress_scale[sel])
-                & (x[:, 2] >= -NEWTON_TOL * (np.abs(de_v[sel]) + J_tr[sel] / G)))
-
+    strain_row = np.maximum(K_ref, G) / stress_scale
+    problem = LocalProblem(surface, hardening, bulk, G, trial, idx, h_n, stress_scale,
+                           strain_row, strain_row if hardening_row is None else hardening_row,
+                           log_shift, admissible)
     every = np.arange(m)
     with np.errstate(all="ignore"):
-        x, jac, converged = newton(*system(de_v, J_tr, every), x0)
-        converged &= solution(x, every)
+        x, jac, converged = newton(*problem.system(trial.de_v[idx], trial.J_tr[idx], every), x0)
+        converged &= problem.solution(x, every)
         failed = np.flatnonzero(~converged)
         if failed.size:
-            def trial_path(t, sel):
-                """(p_tr, J_tr, xi_tr) of the points sel at the fraction t of the step."""
-                s = trial.s_n[idx[sel]] + t[:, None] * (trial.s_tr[idx[sel]] - trial.s_n[idx[sel]])
-                p = bulk.pressure(p_n[sel], t * de_v[sel])
-                xi = p if log_shift is None else np.log(p + log_shift)
-                return t * de_v[sel], np.linalg.norm(s, axis=1) / SQRT2, xi
-
-            def f_path(t, sel):
-                _, J, xi = trial_path(t, sel)
-                return surface(pressure(xi)[0], J, h_n[sel], sel)[0]
-
-            xf, jf, cf = _continuation(system, trial_path, f_path, failed, h_n[failed])
-            x[failed], jac[failed], converged[failed] = xf, jf, cf & solution(xf, failed)
+            xf, jf, cf = _continuation(problem, failed)
+            x[failed], jac[failed], converged[failed] = xf, jf, cf & problem.solution(xf, failed)
     xi, J, dgamma, h = x.T
     # Iterates may cross J = 0 or dgamma = 0; a solution may not, beyond rounding.
     J, dgamma = np.maximum(J, 0.0), np.maximum(dgamma, 0.0)
-    p, dp = pressure(xi)
+    p, dp = problem.pressure(xi)
     # Implicit-function theorem: the inputs de_v, J_tr enter r_p as -de_v and r_J as -J_tr / G.
     rhs = np.zeros((m, 4, 2))
     rhs[:, 0, 0] = strain_row
@@ -419,22 +421,23 @@ def smooth_return(surface, hardening, bulk, G, trial, idx, p_tr, h_n, x0, stress
 CONTINUATION_PARTS = (4, 16, 64, 256)
 
 
-def _continuation(system, trial_path, f_path, sel, h_n):
-    """Solve the one-step problems of the points ``sel`` by continuation in the
-    fraction t of the strain increment: from the elastic fraction t_e (where
-    the trial path meets the surface and the solution is the trial state with
-    dgamma = 0) to t = 1 in N equal parts, each Newton solve starting from the
-    last; N grows over :data:`CONTINUATION_PARTS` for the points that still
-    fail. The answer is the one-step backward-Euler solution itself (the
-    intermediate problems only lead Newton to it), so the tangent is unchanged.
-    Returns (x, Jacobian, converged) aligned with ``sel``."""
+def _continuation(problem, sel):
+    """Solve the one-step problems of the points ``sel`` (positions in the
+    :class:`LocalProblem`'s points) by continuation in the fraction t of the
+    strain increment: from the elastic fraction t_e (where the trial path meets
+    the surface and the solution is the trial state with dgamma = 0) to t = 1
+    in N equal parts, each Newton solve starting from the last; N grows over
+    :data:`CONTINUATION_PARTS` for the points that still fail. The answer is
+    the one-step backward-Euler solution itself (the intermediate problems only
+    lead Newton to it), so the tangent is unchanged. Returns (x, Jacobian,
+    converged) aligned with ``sel``."""
     m = len(sel)
     # Elastic fraction by bisection (t_e = 0 if the step starts outside the surface).
     lo, hi = np.zeros(m), np.ones(m)
-    inside = f_path(lo, sel) <= 0.0
+    inside = problem.f_path(lo, sel) <= 0.0
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        out = f_path(mid, sel) > 0.0
+        out = problem.f_path(mid, sel) > 0.0
         hi = np.where(out, mid, hi)
         lo = np.where(out, lo, mid)
     t_e = np.where(inside, lo, 0.0)
@@ -443,14 +446,14 @@ def _continuation(system, trial_path, f_path, sel, h_n):
     converged = np.zeros(m, dtype=bool)
     todo = np.arange(m)
     for parts in CONTINUATION_PARTS:
-        _, J0, xi0 = trial_path(t_e[todo], sel[todo])
-        xk = np.stack([xi0, J0, np.zeros(todo.size), h_n[todo]], axis=1)
+        _, J0, xi0 = problem.trial_path(t_e[todo], sel[todo])
+        xk = np.stack([xi0, J0, np.zeros(todo.size), problem.h_n[sel[todo]]], axis=1)
         alive = np.ones(todo.size, dtype=bool)
         for k in range(1, parts + 1):
             live = np.flatnonzero(alive)
             t = t_e[todo[live]] + (1.0 - t_e[todo[live]]) * k / parts
-            de_in, J_in, _ = trial_path(t, sel[todo[live]])
-            xs, js, cs = newton(*system(de_in, J_in, sel[todo[live]]), xk[live])
+            de_in, J_in, _ = problem.trial_path(t, sel[todo[live]])
+            xs, js, cs = newton(*problem.system(de_in, J_in, sel[todo[live]]), xk[live])
             xk[live] = xs
             alive[live[~cs]] = False
             if k == parts:

@@ -4,7 +4,7 @@ import dataclasses
 import math
 
 from ..params import param
-from .cone import ConeModel, tension_cutoff_param
+from .cone import ConeModel, cone_samples, tension_cutoff_param
 
 
 @dataclasses.dataclass(frozen=True)
@@ -18,3 +18,8 @@ class VonMises(ConeModel):
     @property
     def cone(self):
         return 0.0, self.c
+
+    @classmethod
+    def conformance_samples(cls):
+        table = {"E": 1.0e5, "nu": 0.3, "c": 100.0}
+        return cone_samples([table], [{**table, "tension_cutoff": 20.0}], apex=False)
