@@ -93,7 +93,7 @@ def run_case(scene_name, overrides):
     from mpi4py import MPI
     from soilbin.meshes import BUILDERS
     from soilbin.problem import SoilProblem
-    from soilbin.scene import load_scene
+    from soilbin.records.scene import load_scene
     from soilbin.solver.stepping import run_load_steps
 
     scene = load_scene(ROOT / "scenes" / f"{scene_name}.toml", overrides)

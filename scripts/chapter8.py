@@ -29,9 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
-from soilbin.run import draft_estimate
-from soilbin.scene import load_scene
-from soilbin.study import Outcome, draw_figures, load_study
+from soilbin.app.run import draft_estimate
+from soilbin.records.scene import load_scene
+from soilbin.app.study import Outcome, draw_figures, load_study
 
 ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "chapter8.toml"

@@ -15,8 +15,8 @@ SOILBIN = Path(sys.executable).parent / "soilbin"
 @pytest.fixture
 def solve(tmp_path):
     """solve(scene_name, *overrides) -> (summary, run folder), in this process."""
-    from soilbin.run import run_scene
-    from soilbin.scene import load_scene
+    from soilbin.app.run import run_scene
+    from soilbin.records.scene import load_scene
 
     def _solve(name, *overrides):
         scene = load_scene(SCENES / f"{name}.toml", overrides)
@@ -31,7 +31,7 @@ def soilbin_cli(*args, mpi_ranks=None, cwd=None):
                OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
     cmd = [str(SOILBIN), *map(str, args)]
     if mpi_ranks:
-        cmd = ["mpirun", "-n", str(mpi_ranks), sys.executable, "-m", "soilbin.cli", *map(str, args)]
+        cmd = ["mpirun", "-n", str(mpi_ranks), sys.executable, "-m", "soilbin.app.cli", *map(str, args)]
     return subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd, timeout=600)
 
 
@@ -44,7 +44,7 @@ def make_problem(scene, *overrides):
     from mpi4py import MPI
     from soilbin.meshes import BUILDERS
     from soilbin.problem import SoilProblem
-    from soilbin.scene import load_scene
+    from soilbin.records.scene import load_scene
 
     path = Path(scene) if str(scene).endswith(".toml") else SCENES / f"{scene}.toml"
     loaded = load_scene(path, overrides)

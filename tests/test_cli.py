@@ -5,7 +5,7 @@ import meshio
 import numpy as np
 import pytest
 
-from soilbin.cli import main
+from soilbin.app.cli import main
 from conftest import SCENES, last_json, soilbin_cli
 
 BLOCK = str(SCENES / "block-drucker-prager.toml")

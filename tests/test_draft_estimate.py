@@ -134,8 +134,8 @@ def test_each_tool_scene_gets_the_estimate_of_the_whole_tool():
     """run.draft_estimate: the scene's geometry, soil (phi, c), gravity and interface (delta,
     c_a); against the glass wall one crescent; embedded (a half model whose forces the
     tool reports for the whole tool) both."""
-    from soilbin.run import draft_estimate
-    from soilbin.scene import load_scene
+    from soilbin.app.run import draft_estimate
+    from soilbin.records.scene import load_scene
 
     scene = ROOT / "scenes" / "tine-2in-90deg.toml"
     dp = ["regions.soil=drucker_prager", "materials.drucker_prager.c=0.05"]
@@ -160,8 +160,8 @@ def test_each_tool_scene_gets_the_estimate_of_the_whole_tool():
 
 def test_draft_figure_draws_the_estimate(tmp_path):
     from types import SimpleNamespace
-    from soilbin import figures
-    from soilbin.scene import load_scene
+    from soilbin.app import figures
+    from soilbin.records.scene import load_scene
 
     scene = load_scene(ROOT / "scenes" / "tine-2in-90deg.toml")
     records = [SimpleNamespace(displacement=0.05 * k, force=40.0 * k) for k in (1, 2)]

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from soilbin.errors import InputError
-from soilbin.scene import scene_from_table
-from soilbin.toml_in import read_toml
+from soilbin.records.scene import scene_from_table
+from soilbin.records.toml_in import read_toml
 from conftest import SCENES
 
 RAW = {path: read_toml(path) for path in sorted(SCENES.glob("*.toml"))}

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from soilbin.errors import InputError
-from soilbin.interface.mohr_coulomb import MohrCoulombInterface
+from soilbin.models.mohr_coulomb_interface import MohrCoulombInterface
 from soilbin.params import from_table
 
 LAW = MohrCoulombInterface(k_n=1e5, k_s=4e4, c_a=3.0, delta=25.0)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from soilbin.run import collapse_pressure
+from soilbin.app.run import collapse_pressure
 from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix
 from conftest import make_problem
@@ -251,13 +251,12 @@ large_deformation = true
 
 
 @pytest.mark.parametrize("large", [True, False])
-@pytest.mark.slow
 def test_a_rotated_frame_gives_the_same_curve(solve, tmp_path, large):
     """Frame indifference of the whole code: the scene turned by an arbitrary rotation."""
     scene = tmp_path / "platens.toml"
     scene.write_text(ROUGH_PLATENS)
-    from soilbin.run import run_scene
-    from soilbin.scene import load_scene
+    from soilbin.app.run import run_scene
+    from soilbin.records.scene import load_scene
     curves = []
     for rotation in ("[0.0, 0.0, 0.0]", "[31.0, -47.0, 76.0]"):
         out = tmp_path / rotation
@@ -286,6 +285,7 @@ def test_corner_squares_keep_their_size_whatever_the_refinement():
         assert np.allclose(high[inside][:, [0, 2]] - low[inside][:, [0, 2]], 0.05)
 
 
+@pytest.mark.slow
 def test_rigid_rough_footing_reaches_its_full_settlement(solve):
     """VII.4 footing in large deformation with squares of w/2 at its edge: to w = 0.1 in
     (10% of the half-width) without failing or folding (no drop in the pressure);

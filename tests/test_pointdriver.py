@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from soilbin.cli import main
-from soilbin.pointdriver import run_point
+from soilbin.app.cli import main
+from soilbin.material_point.driver import run_point
 from conftest import SCENES, last_json
 
 C, PHI = 500.0, 30.0
@@ -216,7 +216,7 @@ def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, args, expected):
 
 
 def test_help_lists_every_path(capsys):
-    from soilbin.paths import PATHS
+    from soilbin.material_point.paths import PATHS
     with pytest.raises(SystemExit):
         main(["point", "--help"])
     text = capsys.readouterr().out
@@ -225,7 +225,7 @@ def test_help_lists_every_path(capsys):
 
 
 def test_path_targets_are_linear_in_the_leg():
-    from soilbin.paths import PATHS
+    from soilbin.material_point.paths import PATHS
     legs = PATHS["triaxial-compression"](confining=10.0, axial_strain=0.02).legs()
     assert [leg.name for leg in legs] == ["confine", "shear"]
     shear = legs[1]
@@ -244,7 +244,7 @@ def test_appendix_c_paths_of_the_modified_cap_run(tmp_path, path, settings):
     """Appendix C (cubical device): the modified cap with the VII.5 parameters on each path.
     (Extension runs too, in scripts/appendix_c.py, but takes a minute: the driver's
     mixed-control Newton keeps cutting at the cap/failure corner.)"""
-    from soilbin.cli import main
+    from soilbin.app.cli import main
     args = ["point", "modified_cap", path, "--out", str(tmp_path), "--json"]
     for s in ["E=4000", "nu=0.35", "A=5.65", "B=0.11", "C=5.6", "beta=0.062", "R=2", "W=0.18",
               "D=0.05", *settings]:

@@ -11,7 +11,7 @@ from soilbin.errors import InputError
 from soilbin.meshes import BUILDERS, SoilBinParams
 from soilbin.meshes.soil_bin import TOOL_FACES
 from soilbin.params import from_table
-from soilbin.scene import load_scene
+from soilbin.records.scene import load_scene
 from conftest import ROOT, SCENES
 
 TINE = SCENES / "tine-2in-90deg.toml"
@@ -20,9 +20,9 @@ HEAVY = ("dolfinx", "gmsh", "petsc4py", "ufl", "basix", "mpi4py")
 
 def test_the_records_layer_loads_no_fenicsx_gmsh_or_mpi():
     code = ("import sys\n"
-            "import soilbin.scene, soilbin.params, soilbin.meshes, soilbin.models, soilbin.elements\n"
-            "import soilbin.pointdriver, soilbin.cli\n"
-            "from soilbin.scene import load_scene\n"
+            "import soilbin.records.scene, soilbin.params, soilbin.meshes, soilbin.models, soilbin.elements\n"
+            "import soilbin.material_point.driver, soilbin.app.cli\n"
+            "from soilbin.records.scene import load_scene\n"
             f"load_scene({str(TINE)!r}, ['geostatic.K0=jaky', 'regions.soil=drucker_prager'])"
             ".resolved()\n"
             "print(' '.join(sorted({m.split('.')[0] for m in sys.modules})))")

@@ -11,10 +11,10 @@ import meshio
 import numpy as np
 import pytest
 
-from soilbin import cli
-from soilbin.keys import scene_keys
-from soilbin.scene import load_scene
-from soilbin import toml_out
+from soilbin.app import cli
+from soilbin.app.keys import scene_keys
+from soilbin.records.scene import load_scene
+from soilbin.records import toml_out
 from conftest import ROOT, SCENES, SOILBIN, last_json, soilbin_cli
 
 BLOCK = str(SCENES / "block-drucker-prager.toml")
@@ -121,11 +121,11 @@ def test_an_error_on_rank_0_ends_both_ranks_with_one_message():
 
 
 def test_an_internal_error_is_one_line_exit_3_and_a_saved_traceback(capsys, monkeypatch, tmp_path):
-    import soilbin.run
+    import soilbin.app.run
 
     def broken(scene, tagged):
         raise ZeroDivisionError("a bug")
-    monkeypatch.setattr(soilbin.run, "check_initial_stress", broken)
+    monkeypatch.setattr(soilbin.app.run, "check_initial_stress", broken)
     status, _, err = run_main(capsys, "run", BLOCK, "--out", tmp_path / "b")
     saved = tmp_path / "b" / "traceback.txt"
     assert status == cli.INTERNAL_ERROR == 3
@@ -191,7 +191,7 @@ def test_the_point_driver_names_every_missing_parameter_at_once(capsys):
 def test_the_jit_compiler_logs_nothing_below_warnings():
     """cffi sets the root logger's level to 0 while it compiles; the command line's handler
     keeps its own level, so a first run on an empty form cache prints no INFO lines."""
-    code = ("from soilbin.cli import _quiet_logging\n_quiet_logging()\nimport ffcx, logging\n"
+    code = ("from soilbin.app.cli import _quiet_logging\n_quiet_logging()\nimport ffcx, logging\n"
             "from setuptools._distutils import log\nlog.set_threshold(0)\n"
             "logging.info('x86_64-linux-gnu-gcc -pthread ...')\nlogging.warning('kept')\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
@@ -201,7 +201,7 @@ def test_the_jit_compiler_logs_nothing_below_warnings():
 def test_the_3d_picture_is_drawn_off_screen(tmp_path):
     """pyvista in its own process (VTK and DOLFINx clash in one): a PNG of the set size."""
     from matplotlib.image import imread
-    from soilbin.figures_3d import draw_in_subprocess
+    from soilbin.app.figures_3d import draw_in_subprocess
     corners = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
     soil = (corners, np.array([[0, 1, 3, 2, 4, 5, 7, 6]]), {"displacement": 0.01 * corners},
             {"plastic_strain": np.array([0.02])})

@@ -72,8 +72,8 @@ def test_rough_wall_lies_between_the_lower_bound_and_coulombs_wedge(solve, tmp_p
     lies above Lancellotta's lower bound for δ = φ (7.25) and below Coulomb's plane wedge
     (18.8, which overestimates for large δ)."""
     from soilbin.closed_form import narrow_tine_draft
-    from soilbin.run import run_scene
-    from soilbin.scene import load_scene
+    from soilbin.app.run import run_scene
+    from soilbin.records.scene import load_scene
     from conftest import SCENES
 
     rough = tmp_path / "retaining-wall-rough.toml"

@@ -79,8 +79,8 @@ def test_embedded_half_model_reports_the_whole_tool():
 
 @pytest.mark.slow
 def test_force_controlled_run_lands_on_the_stated_loads_and_draws_the_sections(tmp_path):
-    from soilbin.run import run_scene
-    from soilbin.scene import load_scene
+    from soilbin.app.run import run_scene
+    from soilbin.records.scene import load_scene
     from conftest import SCENES
 
     overrides = [o for o in COARSE if not o.startswith(("loading.magnitude", "loading.steps"))]

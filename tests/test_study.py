@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from soilbin.cli import main
+from soilbin.app.cli import main
 from soilbin.closed_form.verification import column_settlement
-from soilbin.study import SUMMARY_KEYS, _earlier, _short_names, folder_name, load_study
+from soilbin.app.study import SUMMARY_KEYS, _earlier, _short_names, folder_name, load_study
 from conftest import ROOT
 
 COLUMN = """\
@@ -141,7 +141,7 @@ def test_tool_geometry_study_parses_and_dry_runs(capsys, tmp_path):
 def _study_command(path, out):
     env = dict(os.environ, OMP_NUM_THREADS="1",
                PYTHONPATH=os.pathsep.join(filter(None, (str(ROOT), os.environ.get("PYTHONPATH")))))
-    return [sys.executable, "-m", "soilbin.cli", "study", str(path), "--out", str(out)], env
+    return [sys.executable, "-m", "soilbin.app.cli", "study", str(path), "--out", str(out)], env
 
 
 def _processes_writing(folder):

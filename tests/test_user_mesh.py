@@ -8,7 +8,7 @@ import pytest
 
 from soilbin.closed_form.verification import unconfined_strength
 from soilbin.errors import InputError
-from soilbin.scene import load_scene
+from soilbin.records.scene import load_scene
 from conftest import ROOT, SCENES
 
 USER_SCENE = SCENES / "block-gmsh-file.toml"
@@ -38,7 +38,7 @@ def test_the_shipped_example_is_what_the_script_writes(user_mesh):
 
 
 def test_a_user_mesh_block_collapses_at_the_mohr_coulomb_stress(tmp_path, user_mesh):
-    from soilbin.run import run_scene
+    from soilbin.app.run import run_scene
     user_mesh_copy = tmp_path / user_mesh.name
     user_mesh_copy.write_bytes(user_mesh.read_bytes())
     scene = load_scene(scene_file(tmp_path, user_mesh.name))   # relative to the scene's folder
@@ -63,7 +63,7 @@ def test_a_group_the_file_lacks_is_named_with_the_file_and_its_groups(tmp_path, 
 
 
 def test_files_that_cannot_serve_are_refused(tmp_path):
-    from soilbin.run import run_scene
+    from soilbin.app.run import run_scene
     missing = scene_file(tmp_path, tmp_path / "none.msh")
     with pytest.raises(InputError, match="none.msh': cannot read it"):
         load_scene(missing)

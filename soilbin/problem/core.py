@@ -13,7 +13,7 @@ import ufl
 from dolfinx import fem
 
 from ..forms.discretisation import Discretisation
-from ..scene import TOOL
+from ..records.scene import TOOL
 from ..solver.newton import NewtonSolver
 from ..solver.quadrature import MaterialPoints
 from . import fields

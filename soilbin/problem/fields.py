@@ -9,7 +9,7 @@ from petsc4py import PETSc
 from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401
 
-from ..scene import Field
+from ..records.scene import Field
 from ..solver.quadrature import quadrature_space
 from ..tensors import ufl_from_mandel
 

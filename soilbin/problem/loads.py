@@ -18,7 +18,7 @@ from petsc4py import PETSc
 from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401
 
-from ..scene import TOOL, Control
+from ..records.scene import TOOL, Control
 from ..solver.stepping import Observation
 from ..tensors import ufl_from_mandel
 

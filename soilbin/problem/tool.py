@@ -19,10 +19,10 @@ lift the soil's upward force on the tool.
 import numpy as np
 from mpi4py import MPI
 
-from ..interface.rigid_tool import RigidToolContact
-from ..scene import Control
+from ..records.scene import Control
 from ..solver.stepping import Observation
 from .probes import CellValue, cell_ahead
+from .rigid_tool_contact import RigidToolContact
 
 
 class RigidTool:

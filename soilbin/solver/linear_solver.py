@@ -25,7 +25,7 @@ import time
 from petsc4py import PETSc
 
 from ..errors import ConvergenceError, InputError
-from ..scene import LinearSolverKind
+from ..records.scene import LinearSolverKind
 from .condensation import CellCondensation, Uncondensed
 
 #: Above this many unknowns ``auto`` takes the iterative solver.

@@ -32,7 +32,7 @@ from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401  (registers fem.petsc)
 
 from ..errors import ConvergenceError, ReturnMapError
-from ..scene import LineSearch
+from ..records.scene import LineSearch
 from .linear_solver import LinearSolver, LinearSolveError
 
 

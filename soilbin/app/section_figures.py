@@ -10,7 +10,7 @@ to rank 0, which draws.
 import numpy as np
 from mpi4py import MPI
 
-from .plotting import pyplot
+from ..plotting import pyplot
 
 
 def _node_plane(coordinates, target, comm):

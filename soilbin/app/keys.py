@@ -3,7 +3,7 @@
 import dataclasses
 import enum
 
-from .meshes import BUILDERS
+from ..meshes import BUILDERS
 
 
 def _shown(value):

@@ -1,7 +1,7 @@
 """Overlay figures of a study: the cases' curves, or a summary value against a swept key."""
 import csv
 
-from .plotting import pyplot
+from ..plotting import pyplot
 from .study import DONE, label
 
 

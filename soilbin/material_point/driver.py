@@ -1,7 +1,7 @@
 """Material-point driver: one point of a constitutive model along a loading path.
 
 The same model classes as the finite element solve (:data:`soilbin.models.MODELS`)
-are driven along the paths of :mod:`soilbin.paths` under mixed control: at each
+are driven along the paths of :mod:`soilbin.material_point.paths` under mixed control: at each
 step the strain-controlled components of the strain increment are prescribed
 and the others are found by Newton's method on the residual
 ``sigma(deps)[s] - target[s]`` of the stress-controlled components ``s``, with
@@ -25,13 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ConvergenceError, InputError, ReturnMapError
-from .models import MODELS
-from .params import from_table
-from .plotting import pyplot
+from ..errors import ConvergenceError, InputError, ReturnMapError
+from ..models import MODELS
+from ..params import from_table
+from ..plotting import pyplot
+from ..records.toml_in import assignment, read_toml, scene_path
+from ..tensors import IDENTITY, SQRT2, deviator, from_mandel, trace
 from .paths import PATHS
-from .tensors import IDENTITY, SQRT2, deviator, from_mandel, trace
-from .toml_in import assignment, read_toml, scene_path
 
 #: Newton iteration of one step: relative tolerance on the stress residual,
 #: iterations before the step is cut, and cuts (halvings) of one step.

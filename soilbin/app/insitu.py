@@ -9,7 +9,7 @@ stress (the return mapping projects it), or fails.
 import numpy as np
 from mpi4py import MPI
 
-from .errors import InputError, ReturnMapError
+from ..errors import InputError, ReturnMapError
 
 #: Relative change of the stress under a zero increment taken as "outside".
 TOLERANCE = 1e-8

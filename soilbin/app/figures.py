@@ -2,7 +2,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from .plotting import pyplot
+from ..plotting import pyplot
 
 
 def curve_png(records, scene, path, estimate=None):

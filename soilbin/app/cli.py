@@ -10,9 +10,9 @@ import traceback
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+from ..errors import InputError, SoilbinError
+from ..records.toml_in import SCENES_DIR, read_toml, scene_path
 from . import interrupt
-from .errors import InputError, SoilbinError
-from .toml_in import SCENES_DIR, read_toml, scene_path
 
 EPILOG = """\
 examples:
@@ -88,8 +88,8 @@ written), 2 bad input.
 
 def _point_parser(sub):
     import textwrap
-    from .paths import PATHS
-    from .params import describe
+    from ..material_point.paths import PATHS
+    from ..params import describe
     lines = []
     for name, cls in PATHS.items():
         lines += textwrap.wrap(f"{name}: {' '.join((cls.__doc__ or '').split())}", 79,
@@ -127,8 +127,8 @@ def _version():
 
 
 def _keys(args):
+    from ..records.scene import load_scene
     from .keys import format_keys
-    from .scene import load_scene
     print("\n".join(format_keys(load_scene(scene_path(args.scene), args.overrides))))
     return 0
 
@@ -151,7 +151,7 @@ def _progress(record):
 
 def _run(args):
     from mpi4py import MPI
-    from .scene import load_scene
+    from ..records.scene import load_scene
     from .run import run_scene
 
     scene = load_scene(scene_path(args.scene), args.overrides)
@@ -187,8 +187,8 @@ def _run(args):
 
 
 def _point(args):
-    from .errors import InputError
-    from .pointdriver import material_table, run_point, split_overrides
+    from ..errors import InputError
+    from ..material_point.driver import material_table, run_point, split_overrides
 
     model_table, path_table = split_overrides(args.overrides)
     model, material, name = args.model, None, args.model

@@ -14,8 +14,8 @@ from dolfinx.cpp.io import perm_vtk
 from dolfinx.cpp.mesh import entities_to_geometry
 from dolfinx.mesh import CellType
 
+from ..records.scene import TOOL
 from .interrupt import deferred
-from .scene import TOOL
 from .xdmf import XdmfSeries
 
 #: Every column a curve.csv may have; a run writes the step, what its problem observes
@@ -147,7 +147,7 @@ class FieldWriter:
 
 
 class RunFolder:
-    """One folder per run (made and cleared beforehand: :mod:`soilbin.outdir`). Only rank 0
+    """One folder per run (made and cleared beforehand: :mod:`soilbin.app.outdir`). Only rank 0
     writes files; writing fields is collective."""
 
     def __init__(self, path, problem, scene):

@@ -11,15 +11,15 @@ import dataclasses
 import enum
 from pathlib import Path
 
-from .elements import Element
-from .errors import InputError
-from .geostatic import Geostatic, read_geostatic
-from .interface.mohr_coulomb import MohrCoulombInterface
-from .meshes import BUILDERS
-from .models import MODELS
-from .params import Params, from_table, param
-from .toml_in import assignment, read_toml
+from ..elements import Element
+from ..errors import InputError
+from ..meshes import BUILDERS
+from ..models import MODELS
+from ..models.mohr_coulomb_interface import MohrCoulombInterface
+from ..params import Params, from_table, param
 from . import toml_out
+from .geostatic import Geostatic, read_geostatic
+from .toml_in import assignment, read_toml
 
 
 class Control(enum.Enum):

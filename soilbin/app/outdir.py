@@ -7,7 +7,7 @@ user keeps in the folder stays.
 import shutil
 from pathlib import Path
 
-from .errors import InputError
+from ..errors import InputError
 
 #: What ``soilbin run`` writes into its folder (file patterns, and the folder of field frames).
 RUN_FILES = ("scene.toml", "curve.csv", "curve.png", "summary.json", "fields.xdmf", "fields.h5",

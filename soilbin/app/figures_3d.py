@@ -1,7 +1,7 @@
 """A 3D picture of a tool run: the deformed soil coloured by the equivalent plastic strain,
 with the tool drawn, made off screen with pyvista (EGL or OSMesa; no X server).
 
-VTK runs in its own process (``python -m soilbin.figures_3d DATA.npz OUT.png UNITS``):
+VTK runs in its own process (``python -m soilbin.app.figures_3d DATA.npz OUT.png UNITS``):
 in the process that has loaded DOLFINx, VTK's C++ runtime clashes with it (std::regex
 aborts), and a crash of the renderer must not end a run. A picture that cannot be drawn
 is a warning, not a failed run.

@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from .errors import InputError
-from .params import Params, from_table, param
+from ..errors import InputError
+from ..params import Params, from_table, param
 
 #: The K0 that follows the friction angle.
 JAKY = "jaky"

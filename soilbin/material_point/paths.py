@@ -1,4 +1,4 @@
-"""Loading paths of the material-point driver (:mod:`soilbin.pointdriver`).
+"""Loading paths of the material-point driver (:mod:`soilbin.material_point.driver`).
 
 A path is a sequence of :class:`Leg` s. In a leg every one of the six Mandel
 components is either strain-controlled (its strain changes by a given amount
@@ -17,9 +17,9 @@ import math
 
 import numpy as np
 
-from .errors import InputError
-from .params import Params, param
-from .tensors import SQRT2
+from ..errors import InputError
+from ..params import Params, param
+from ..tensors import SQRT2
 
 #: Component kinds in a leg.
 STRAIN, STRESS = "e", "s"

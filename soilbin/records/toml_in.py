@@ -1,18 +1,18 @@
 """TOML input: finding and reading scene files, and the values of ``--set key=value``.
 
-Shared by the scene reader (:mod:`soilbin.scene`) and the material-point
-driver (:mod:`soilbin.pointdriver`); every error names the file or the key.
+Shared by the scene reader (:mod:`soilbin.records.scene`) and the material-point
+driver (:mod:`soilbin.material_point.driver`); every error names the file or the key.
 """
 import re
 import tomllib
 from pathlib import Path
 
-from .errors import InputError
+from ..errors import InputError
 
 #: A dotted key of --set.
 KEY = re.compile(r"[A-Za-z0-9_-]+(\.[A-Za-z0-9_-]+)*")
 #: The project's scene files.
-SCENES_DIR = Path(__file__).resolve().parent.parent / "scenes"
+SCENES_DIR = Path(__file__).resolve().parents[2] / "scenes"
 
 
 def scene_path(arg):

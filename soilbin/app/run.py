@@ -5,15 +5,15 @@ import time
 
 from mpi4py import MPI
 
+from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
+from ..meshes import BUILDERS
+from ..problem import SoilProblem
+from ..records.scene import COLLAPSE_COMPLIANCE, Headline
+from ..solver.stepping import StepperResult, run_load_steps
 from . import figures, figures_3d, interrupt, section_figures
-from .closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
 from .insitu import check_initial_stress
-from .meshes import BUILDERS
 from .outdir import prepare_on_rank0
 from .output import RunFolder
-from .problem import SoilProblem
-from .scene import COLLAPSE_COMPLIANCE, Headline
-from .solver.stepping import StepperResult, run_load_steps
 
 
 def collapse_pressure(records):

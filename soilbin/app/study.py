@@ -24,10 +24,10 @@ import time
 import tomllib
 from pathlib import Path
 
+from ..errors import InputError
+from ..params import Params, describe, from_table, param
+from ..records.toml_out import _scalar as toml_value
 from .cli import SCENES_DIR
-from .errors import InputError
-from .params import Params, describe, from_table, param
-from .toml_out import _scalar as toml_value
 
 DONE = ("complete", "collapse")   # statuses of a case that reached its end
 #: Keys of every run summary (soilbin/run.py); a scene adds its headline keys.
@@ -39,7 +39,7 @@ TOP_LEVEL = ("title", "scene", "set", "case", "product", "run", "table", "figure
 MAX_NAME = 64        # longest folder name before it is shortened and ends in a hash
 POLL_S = 0.2         # how often running cases are looked at
 STOP_S = 10.0        # how long a stopped case may take to end before it is killed
-PACKAGE_ROOT = Path(__file__).resolve().parent.parent   # the cases run this same soilbin
+PACKAGE_ROOT = Path(__file__).resolve().parents[2]   # the cases run this same soilbin
 
 
 class FigureKind(enum.Enum):
@@ -192,7 +192,7 @@ def _override(key, value):
 
 
 def _case(scene_path, common, own, short):
-    from .scene import load_scene
+    from ..records.scene import load_scene
     name = folder_name(own, short)
     values = {**common, **own}
     overrides = tuple(_override(key, value) for key, value in values.items())
@@ -302,7 +302,7 @@ def earlier_summary(case, folder):
 
 def case_command(study, case, folder):
     """The command line that solves one case into its folder."""
-    command = [sys.executable, "-m", "soilbin.cli", "run", str(study.scene_path),
+    command = [sys.executable, "-m", "soilbin.app.cli", "run", str(study.scene_path),
                "--out", str(folder), "--json"]
     for override in case.overrides:
         command += ["--set", override]

@@ -1,0 +1,1 @@
+"""The application: command line, runs and studies, outputs and figures."""

@@ -1,1 +1,0 @@
-"""Tool–soil interfaces: the interface law and its nodal penalty assembly."""

@@ -1,0 +1,1 @@
+"""The material-point driver: stress and strain paths through one model."""
