@@ -14,8 +14,8 @@ chapter8 markers:
   against large deformation (read off the curve at 12, 24, ... lb, linear
   between converged steps where the adaptive steps did not land on one).
 Loads and travel in lb and in; the dissertation's figures 8.2-8.9 are the
-study's figure-8.*.png, figures 8.10-8.12 each case's sections-*.png (--no-run draws the figures of
-the cases finished so far).
+study's figure-8.*.png (drawn here too, of the cases finished so far),
+figures 8.10-8.12 each case's sections-*.png.
 """
 import argparse
 import csv
@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
 from soilbin.app.run import draft_estimate
-from soilbin.records.scene import load_scene
 from soilbin.app.study import Outcome, draw_figures, load_study
+from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
+from soilbin.records.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "chapter8.toml"
