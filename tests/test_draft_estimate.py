@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from soilbin.closed_form import MODEL, NoWedge, chapter_viii_cases, chapter_viii_table, narrow_tine_draft
+from soilbin.closed_form.earth_pressure import rankine_passive
 
 rad = math.radians
 ROOT = Path(__file__).resolve().parent.parent
@@ -35,7 +36,7 @@ def test_smooth_vertical_wide_blade_is_rankine_passive(phi):
     """alpha = 90, delta = 0, c = 0: H = Kp gamma d^2 w / 2 with Kp = tan^2(45 + phi/2) and
     the failure plane at beta = 45 - phi/2 (Rankine); phi = 33 gives Kp/2 = 1.6961."""
     est = narrow_tine_draft(width=1.0, depth=1.0, rake=90.0, phi=phi, delta=0.0, gamma=1.0, crescents=0)
-    kp = math.tan(rad(45.0 + phi / 2.0)) ** 2
+    kp = rankine_passive(phi)
     assert est.draft == pytest.approx(kp / 2.0, rel=1e-9)
     assert est.vertical == pytest.approx(0.0, abs=1e-9)
     assert est.rupture_angle == pytest.approx(45.0 - phi / 2.0, abs=1e-5)
@@ -202,7 +203,7 @@ def test_curved_failure_surface_is_linearised_at_the_passive_state(B):
         return 5.6 + B * I1 - e, B + 0.062 * e
 
     s = passive_wedge_strength(failure, 0.072, 6.0)
-    kp = math.tan(rad(45.0 + s.phi / 2.0)) ** 2
+    kp = rankine_passive(s.phi)
     assert s.I1 == pytest.approx(1.5 * (1.0 + kp) * 0.072 * 3.0, rel=1e-10)
     alpha, k = Matching.COMPRESSION_CONE.coefficients(s.c, s.phi)
     F, dF = failure(s.I1)

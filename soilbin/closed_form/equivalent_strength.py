@@ -8,7 +8,7 @@ tool's mid-depth z = d/2 (plane strain, the intermediate stress the mean of the 
 two; compression positive):
 
  (1) sigma_v = gamma z,  sigma_h = Kp sigma_v,  sigma_2 = (sigma_v + sigma_h) / 2,
-     I1* = 3/2 (1 + Kp) gamma z,  Kp = (1 + sin phi) / (1 - sin phi);
+     I1* = 3/2 (1 + Kp) gamma z,  Kp = tan^2(45 + phi/2) (Rankine);
  (2) the tangent cone sqrt(J2) = alpha I1 + k: alpha = F'(I1*), k = F(I1*) - alpha I1*;
  (3) Mohr–Coulomb through the cone's compression meridian (the inverse of
      Matching.COMPRESSION_CONE, app. B eq. B.2 after Chen & Mizuno 1990):
@@ -20,6 +20,8 @@ F concave and increasing makes k >= F(0) >= 0, so c >= 0.
 """
 import math
 from dataclasses import dataclass
+
+from .earth_pressure import rankine_passive
 
 SQRT3 = math.sqrt(3.0)
 
@@ -50,8 +52,7 @@ def passive_wedge_strength(failure, unit_weight, depth, iterations=100, rtol=1e-
     for _ in range(iterations):
         F, dF = (float(v) for v in failure(I1)[:2])
         phi, c = mohr_coulomb_of_compression_cone(dF, F - dF * I1)     # (2), (3)
-        s = math.sin(math.radians(phi))
-        I1_next = 1.5 * (1.0 + (1.0 + s) / (1.0 - s)) * sigma_v           # (1)
+        I1_next = 1.5 * (1.0 + rankine_passive(phi)) * sigma_v               # (1)
         if abs(I1_next - I1) <= rtol * I1_next:
             return EquivalentStrength(phi, c, I1)
         I1 = I1_next
