@@ -5,10 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from soilbin.app.run import collapse_pressure
+from soilbin.app.run import collapse_limit, collapse_pressure
+from soilbin.records.scene import load_scene
 from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix
-from conftest import make_problem
+from conftest import SCENES, make_problem
 
 
 def read_curve(out):
@@ -215,6 +216,20 @@ def test_collapse_pressure_is_where_the_settlement_per_step_blows_up():
     assert collapse_pressure(curve[:2]) is None
     assert collapse_pressure(curve[:2] + [record(19.0, 0.052)]) == 19.0
 
+
+
+def test_force_control_until_collapse_ends_where_the_travel_runs_away():
+    """The same criterion on the applied load ends a force-controlled run at its limit: the
+    strip load (100 psi at load factor 1) stops at the 200x step, not at the 50x one."""
+    scene = load_scene(SCENES / "strip-load-von-mises.toml")
+    limit = collapse_limit(scene)
+    curve = [StepRecord(k + 1, p / 100.0, w, p, 1, 0, 0, 0.0, (), {"pressure": p})
+             for k, (p, w) in enumerate([(10.0, 1e-3), (20.0, 0.051), (20.5, 0.061)])]
+    assert limit(curve[:1]) is None and limit(curve[:2]) is None
+    assert "the soil's limit: at load 20.5" in limit(curve)
+    assert collapse_limit(load_scene(SCENES / "strip-load-von-mises.toml",
+                                     ["loading.until_collapse=false"])) is None
+    assert collapse_limit(load_scene(SCENES / "strip-footing-von-mises.toml")) is None
 
 ROUGH_PLATENS = """
 title = "block between rough platens, Drucker-Prager"

@@ -65,3 +65,17 @@ def test_steps_land_on_the_stated_load_factors():
     result = run_load_steps(CollapsingProblem(limit=2.0), steps=4, max_cuts=3,
                             on_step=lambda r: None, stops=(0.3, 0.6))
     assert [r.load_factor for r in result.steps] == pytest.approx([0.25, 0.3, 0.55, 0.6, 0.85, 1.0])
+
+
+def test_a_limit_ends_the_run_after_the_step_that_reaches_it():
+    """The ``limit`` callback sees every converged step; the run stops at the first it names."""
+    seen = []
+
+    def limit(records):
+        seen.append(len(records))
+        return "limit reached" if records[-1].load_factor >= 0.5 else None
+
+    result = run_load_steps(CollapsingProblem(limit=2.0), steps=4, max_cuts=3,
+                            on_step=lambda r: None, limit=limit)
+    assert not result.complete and result.limit_reached and result.message == "limit reached"
+    assert [r.load_factor for r in result.steps] == [0.25, 0.5] and seen == [1, 2]

@@ -21,8 +21,10 @@ examples:
   soilbin run column-elastic --set materials.soil.E=5000 --set loading.magnitude=20
   soilbin run block-drucker-prager --json --out /tmp/block
 
-exit status: 0 done (a force-controlled run that stops at collapse with
-loading.until_collapse = true counts as done), 1 the run could not reach the
+exit status: 0 done (with loading.until_collapse = true a force-controlled run
+that stops at the soil's limit counts as done: status "collapse", at the first
+step whose displacement per unit load is 100 times the first step's or that
+cannot be converged), 1 the run could not reach the
 full load (converged steps are on disk), 2 bad input (the message names the
 file, the key and the accepted range), 3 internal error (one line; the
 traceback is saved to a file it names), 130 / 143 interrupted by SIGINT /

@@ -8,7 +8,7 @@ from mpi4py import MPI
 from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
 from ..meshes import BUILDERS
 from ..problem import SoilProblem
-from ..records.scene import COLLAPSE_COMPLIANCE, Headline
+from ..records.scene import COLLAPSE_COMPLIANCE, Control, Headline
 from ..solver.stepping import StepperResult, run_load_steps
 from . import figures, figures_3d, interrupt, section_figures
 from .insitu import check_initial_stress
@@ -16,17 +16,43 @@ from .outdir import prepare_on_rank0
 from .output import RunFolder
 
 
+def collapse_step(loads, displacements):
+    """Index of the first step (of curves starting at zero, not included) whose displacement
+    increment per unit load increment is at least COLLAPSE_COMPLIANCE times the first step's,
+    or None."""
+    elastic = displacements[1] / loads[1]
+    for k in range(1, len(loads)):
+        dp, dw = loads[k] - loads[k - 1], displacements[k] - displacements[k - 1]
+        if dw >= COLLAPSE_COMPLIANCE * elastic * dp:
+            return k
+    return None
+
+
 def collapse_pressure(records):
     """The pressure of the first step whose settlement increment per unit pressure increment
     is at least COLLAPSE_COMPLIANCE times the first step's, or None."""
     pressures = [0.0] + [r.columns["pressure"] for r in records]
-    settlements = [0.0] + [r.displacement for r in records]
-    elastic = settlements[1] / pressures[1]
-    for k in range(1, len(pressures)):
-        dp, dw = pressures[k] - pressures[k - 1], settlements[k] - settlements[k - 1]
-        if dw >= COLLAPSE_COMPLIANCE * elastic * dp:
-            return pressures[k]
-    return None
+    k = collapse_step(pressures, [0.0] + [r.displacement for r in records])
+    return None if k is None else pressures[k]
+
+
+def collapse_limit(scene):
+    """Under force control with ``until_collapse``: the stepper's ``limit`` that ends the run
+    at the first step whose travel per unit of applied load is COLLAPSE_COMPLIANCE times the
+    first step's (the soil's limit: the travel runs away), else None."""
+    loading = scene.loading
+    if loading.control is not Control.FORCE or not loading.until_collapse:
+        return None
+
+    def limit(records):
+        loads = [0.0] + [r.load_factor * loading.magnitude for r in records]
+        if collapse_step(loads, [0.0] + [r.displacement for r in records]) is None:
+            return None
+        last = records[-1]
+        return (f"the soil's limit: at load {loads[-1]:.6g} the displacement per unit load of "
+                f"step {last.step} is at least {COLLAPSE_COMPLIANCE:g} times the first step's "
+                f"(displacement {last.displacement:.6g})")
+    return limit
 
 
 def headline_results(scene, records):
@@ -101,7 +127,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     loading = scene.loading
     interrupted = None
     try:
-        result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step, stops=stops)
+        result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step, stops=stops,
+                                limit=collapse_limit(scene))
     except interrupt.Interrupted as signal:
         interrupted = signal
         result = StepperResult(tuple(folder.records), False,
@@ -110,7 +137,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         status = "interrupted"
     elif result.complete:
         status = "complete"
-    elif loading.until_collapse and result.steps:
+    elif result.limit_reached or (loading.until_collapse and result.steps):
         status = "collapse"
     else:
         status = "failed"

@@ -129,8 +129,10 @@ class Loading(Params):
                              doc="traction (force/area) or displacement (length) at load factor 1")
     steps: int = param(lo=1, hi=MAX_STEPS, doc="number of equal load steps to load factor 1")
     max_cuts: int = param(8, lo=0, hi=30, doc="times a failing step may be halved in a row")
-    until_collapse: bool = param(False, doc="force control: a step that cannot be converged "
-                                            "marks the collapse load and ends the run normally")
+    until_collapse: bool = param(False, doc="force control: the run ends normally at the soil's "
+                                            "limit, the first step whose displacement per unit load "
+                                            "is 100 times the first step's, or a step that cannot "
+                                            "be converged")
 
 
 TOOL = "tool"   # the loading boundary name that means the rigid tool

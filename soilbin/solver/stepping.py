@@ -10,7 +10,9 @@ it doubles (back toward the nominal one) after an easy step (at most
 ``EASY`` iterations), halves after a hard one (at least ``HARD``, before the
 next one fails), and stays otherwise. Every converged step is handed to
 ``on_step`` at once, so a run that stops early leaves all its converged
-steps behind.
+steps behind. A ``limit`` callback, asked after every converged step, may end
+the run early with its message (under force control: the soil's limit is
+reached, the travel running away).
 """
 import dataclasses
 import time
@@ -72,11 +74,13 @@ class StepperResult:
     steps: tuple
     complete: bool          # reached load factor 1
     message: str            # why it stopped early ('' when complete)
+    limit_reached: bool = False   # stopped by the ``limit`` callback
 
 
 def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter,
-                   stops=()):
-    """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors)."""
+                   stops=(), limit=None):
+    """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors);
+    ``limit(records)``, if given, returns why the run ends after the last record, or None."""
     nominal = 1.0 / steps
     level, factor, cuts, failed = 0, 0.0, 0, 0      # increment = nominal / 2**level
     records, start = [], clock()
@@ -106,6 +110,9 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
                             seen.columns)
         records.append(record)
         on_step(record)
+        reason = limit(records) if limit is not None else None
+        if reason:
+            return StepperResult(tuple(records), False, reason, limit_reached=True)
         if result.iterations <= EASY:
             level = max(level - 1, 0)
         elif result.iterations >= HARD:
