@@ -313,3 +313,27 @@ def test_registry_builds_the_caps():
     model = from_table(MODELS["modified_cap"], VII5, "m")
     assert model.X0 == 0.0 and model.tension_cutoff == math.inf
     assert dataclasses.replace(model, X0=20.0) == MODIFIED
+
+
+@pytest.mark.parametrize("model", ALL + RETREATING, ids=model_id)
+def test_a_warm_start_from_any_guess_gives_the_cold_return(model):
+    """The cap return may start from a guess state (the last Newton iterate's): from a
+    nearby increment's, from a far one's and from one of another step, the stress and
+    tangent are those of the return from the trial state, to its tolerance (normally
+    consolidated K0 states, as in the tool scenes)."""
+    model = dataclasses.replace(model, X0=0.0)
+    rng = np.random.default_rng(7)
+    n = 400
+    depth = rng.uniform(0.05, 12.0, n)
+    stress = -0.072 * depth[:, None] * np.array([0.455, 0.455, 1.0, 0.0, 0.0, 0.0])
+    state = model.initial_state(n, stress)
+    deps = 3e-4 * rng.normal(size=(n, 6))
+    sigma, tangent, new = model.update(deps, state)
+    assert np.count_nonzero(new["yield_state"] == S_CAP) > n // 4
+    for other in (deps * (1.0 + 1e-3 * rng.normal(size=deps.shape)), -deps,
+                  30.0 * rng.normal(size=(n, 6)) * 3e-4):
+        guess = model.update(other, state)[2]
+        s_warm, t_warm, n_warm = model.update(deps, state, guess=guess)
+        np.testing.assert_allclose(s_warm, sigma, rtol=0.0, atol=1e-10 * np.abs(sigma).max())
+        np.testing.assert_allclose(t_warm, tangent, rtol=0.0, atol=1e-9 * np.abs(tangent).max())
+        np.testing.assert_array_equal(n_warm["yield_state"], new["yield_state"])

@@ -83,14 +83,17 @@ class Model(Params, abc.ABC):
             state["stress"][:] = stress0
         return state
 
-    def update(self, deps, state):
+    def update(self, deps, state, guess=None):
         """(sigma, C_tan, new_state) for the strain increment ``deps`` (n, 6) from
-        the committed ``state``; neither input is modified.
+        the committed ``state``; neither input is modified. ``guess``, if given, is
+        the new state of a nearby increment from the same ``state`` (the last Newton
+        iterate's): an iterative return may start from it; the result does not
+        depend on it beyond the return's tolerance.
 
         Raises ReturnMapError when the result is not finite at some point.
         """
         with np.errstate(all="ignore"):   # a non-finite result is reported below
-            sigma, tangent, new_state = self.integrate(np.asarray(deps, dtype=float), state)
+            sigma, tangent, new_state = self.integrate(np.asarray(deps, dtype=float), state, guess)
         ok = np.isfinite(sigma).all(axis=-1) & np.isfinite(tangent).all(axis=(-2, -1))
         failed = np.count_nonzero(~ok)
         if failed:
@@ -104,5 +107,5 @@ class Model(Params, abc.ABC):
         raise NotImplementedError(f"{cls.__name__} declares no conformance samples")
 
     @abc.abstractmethod
-    def integrate(self, deps, state):
+    def integrate(self, deps, state, guess=None):
         """The model's own update, as :meth:`update` but unchecked."""

@@ -242,7 +242,7 @@ class CapModel(IsotropicElasticity):
             state["cap_X"][L == self.L_min] = X0
         return state
 
-    def integrate(self, deps, state):
+    def integrate(self, deps, state, guess=None):
         G, K, R = self.G, self.K, self.R
         bulk = self.bulk
         trial = Trial.split(deps, state["stress"], G)
@@ -290,7 +290,7 @@ class CapModel(IsotropicElasticity):
         icap = np.flatnonzero(cap)
         if icap.size:
             kappa[icap] = self._cap_return(trial, bulk, icap, p_tr[icap], kappa_n[icap],
-                                           scale[icap], response)
+                                           scale[icap], response, guess)
         ic = np.flatnonzero(cap_corner)
         if self.hardening is CapHardening.VOLUMETRIC:
             self._retreat(trial, bulk, np.flatnonzero(corner | cut | fail), ic, kappa_n, kappa,
@@ -389,10 +389,24 @@ class CapModel(IsotropicElasticity):
                             dF[k] * L_e[k], zero[k], c)
         return kappa
 
-    def _cap_return(self, trial, bulk, idx, p_tr, kappa_n, scale, response):
+    def _warm_start(self, trial, bulk, idx, guess, surface, k):
+        """(p, J, dgamma, kappa) of the cap return from the ``guess`` state at the points
+        ``idx`` (``k``: their positions in the return): its stress and cap centre, and
+        the multiplier that best splits this step's strain along the flow direction there,
+        dgamma = (c f_p + s f_J) / (f_p^2 + f_J^2), c = de_v - E(p; p_n), s = (J_tr - J) / G."""
+        p, J = invariants(guess["stress"][idx])
+        kappa = guess["cap_L"][idx]
+        s = surface(p, J, kappa, k)
+        c = trial.de_v[idx] - bulk.strain(p, trial.p_n[idx])
+        shear = (trial.J_tr[idx] - J) / self.G
+        dgamma = np.maximum((c * s.f_p + shear * s.f_J) / (s.f_p**2 + s.f_J**2), 0.0)
+        return np.stack([p, J, dgamma, kappa], axis=1)
+
+    def _cap_return(self, trial, bulk, idx, p_tr, kappa_n, scale, response, guess=None):
         """Return onto the hardening cap (smooth_return with h = kappa, the cap centre
         L = max(kappa, L_min): below L_min only the cap's end X(kappa) moves, and its
-        height (X - L) / R falls short of F(L)); returns kappa."""
+        height (X - L) / R falls short of F(L)), from the trial state or, where the
+        ``guess`` state is on a free cap, from it; returns kappa."""
         R, L_min = self.R, self.L_min
         volumetric = self.hardening is CapHardening.VOLUMETRIC
 
@@ -421,10 +435,14 @@ class CapModel(IsotropicElasticity):
             H, dH = self.compaction(kappa)
             return H - H_n[k] - compaction, dH, -np.ones_like(kappa)
 
-        x0 = np.stack([p_tr, trial.J_tr[idx], np.zeros(idx.size), kappa_n], axis=1)
+        cold = np.stack([p_tr, trial.J_tr[idx], np.zeros(idx.size), kappa_n], axis=1)
+        x0 = cold.copy()
+        if guess is not None:
+            k = np.flatnonzero((guess["yield_state"][idx] == CAP) & (guess["cap_L"][idx] > L_min))
+            x0[k] = self._warm_start(trial, bulk, idx[k], guess, surface, k)
         p, J, _, kappa, sens, converged = smooth_return(
             surface, hardening, bulk, self.G, trial, idx, p_tr, kappa_n, x0, scale,
-            admissible=admissible)
+            admissible=admissible, fallback=cold)
         check_converged(self, converged, len(trial.p_n))
         response.solved(idx, p, J, *sens, CAP)
         return kappa

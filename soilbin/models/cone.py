@@ -194,7 +194,7 @@ class ConeModel(IsotropicElasticity):
         """eta_g of the flow potential g = sqrt(J2) + eta_g p (default: associated)."""
         return self.cone[0]
 
-    def integrate(self, deps, state):
+    def integrate(self, deps, state, guess=None):
         stress_n = state["stress"]
         eta, k = self.cone
         sigma, tangent, yield_state = return_map(self.trial(deps, stress_n), self.K, self.G,

@@ -189,7 +189,7 @@ class CriticalStateModel(IsotropicElasticity):
         state["p_c"] = np.maximum(self.p_c0, self.ocr * through)
         return state
 
-    def integrate(self, deps, state):
+    def integrate(self, deps, state, guess=None):
         G, bulk, theta = self.G, self.bulk, self.theta
         n = len(deps)
         trial = Trial.split(deps, state["stress"], G)

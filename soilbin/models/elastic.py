@@ -103,7 +103,7 @@ class LinearElastic(IsotropicElasticity):
 
     linear = True
 
-    def integrate(self, deps, state):
+    def integrate(self, deps, state, guess=None):
         sigma = self.trial(deps, state["stress"])
         tangent = np.repeat(self.stiffness[None], len(sigma), axis=0)
         return sigma, tangent, {"stress": sigma}

@@ -370,7 +370,7 @@ class LocalProblem:
 
 
 def smooth_return(surface, hardening, bulk, G, trial, idx, p_tr, h_n, x0, stress_scale,
-                  log_shift=None, admissible=None, hardening_row=None):
+                  log_shift=None, admissible=None, hardening_row=None, fallback=None):
     """Backward-Euler return of the points ``idx`` onto one smooth hardening
     surface (the local problem of the module doc).
 
@@ -383,7 +383,9 @@ def smooth_return(surface, hardening, bulk, G, trial, idx, p_tr, h_n, x0, stress
     and p = xi if it is None; ``admissible(p, J, h, k)`` where iterates may go
     (beyond the bulk law's range); ``stress_scale`` (m,) scales the strain
     residuals, ``hardening_row`` (m,) the hardening residual (default: as a
-    strain). Points where Newton fails from ``x0`` are solved by continuation
+    strain). Points where Newton fails from ``x0`` start again from ``fallback``
+    (m, 4), if given (x0 then a warm start from a nearby solution, fallback the trial
+    state), and where it fails from there too are solved by continuation
     (:func:`_continuation`); a root with dgamma < 0 or J < 0 is no solution.
     Returns (p, J, dgamma, h, (p_e, p_J, J_e, J_J), converged).
     """
@@ -399,6 +401,11 @@ def smooth_return(surface, hardening, bulk, G, trial, idx, p_tr, h_n, x0, stress
         x, jac, converged = newton(*problem.system(trial.de_v[idx], trial.J_tr[idx], every), x0)
         converged &= problem.solution(x, every)
         failed = np.flatnonzero(~converged)
+        if failed.size and fallback is not None:
+            sub = problem.system(trial.de_v[idx[failed]], trial.J_tr[idx[failed]], failed)
+            xf, jf, cf = newton(*sub, fallback[failed])
+            x[failed], jac[failed], converged[failed] = xf, jf, cf & problem.solution(xf, failed)
+            failed = np.flatnonzero(~converged)
         if failed.size:
             xf, jf, cf = _continuation(problem, failed)
             x[failed], jac[failed], converged[failed] = xf, jf, cf & problem.solution(xf, failed)

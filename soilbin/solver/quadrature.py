@@ -93,7 +93,8 @@ class MaterialPoints:
 
         At the committed state itself (the first iterate of a load step) the
         stress is the committed one and the tangent the last converged one, so
-        Newton's first correction is elasto-plastic rather than elastic.
+        Newton's first correction is elasto-plastic rather than elastic. Elsewhere
+        the returns may start from the last iterate's states (``guess``).
         """
         if self._at_committed_state():
             self.trial = dict(self.committed)
@@ -108,7 +109,8 @@ class MaterialPoints:
             if self.strain is not None:
                 self.write(deps, self.strain)
             for name, idx in self.index.items():
-                sigma, tangent, state = self.models[name].update(deps[idx], self.committed[name])
+                sigma, tangent, state = self.models[name].update(deps[idx], self.committed[name],
+                                                                 guess=self.trial[name])
                 self._stress[idx] = sigma
                 if not self._tangent_frozen:
                     self._tangent[idx] = tangent
