@@ -277,7 +277,9 @@ class CapModel(IsotropicElasticity):
         cap_corner = low & ~corner & ~cut & (g_cap <= 0.0)
         fail = low & ~corner & ~cut & ~cap_corner
 
-        response.fixed(np.flatnonzero(corner), p_lo, J_lo, APEX)
+        last = guess["yield_state"] if guess is not None else response.code
+        fixed_cap_corner = cap_corner & (self.hardening is CapHardening.CAP_COMPACTION)
+        self._fixed_vertices(trial, bulk, corner, fixed_cap_corner, L_n, last, response)
         it = np.flatnonzero(cut)
         zero = np.zeros(it.size)
         response.solved(it, np.full(it.size, p_lo), J_tr[it], zero, zero, zero, zero + 1.0, CUTOFF)
@@ -291,12 +293,9 @@ class CapModel(IsotropicElasticity):
         if icap.size:
             kappa[icap] = self._cap_return(trial, bulk, icap, p_tr[icap], kappa_n[icap],
                                            scale[icap], response, guess)
-        ic = np.flatnonzero(cap_corner)
         if self.hardening is CapHardening.VOLUMETRIC:
-            self._retreat(trial, bulk, np.flatnonzero(corner | cut | fail), ic, kappa_n, kappa,
-                          response)
-        else:
-            response.fixed(ic, L_n[ic] / 3.0, F_L[ic], CAP_CORNER)
+            self._retreat(trial, bulk, np.flatnonzero(corner | cut | fail),
+                          np.flatnonzero(cap_corner), kappa_n, kappa, response)
 
         sigma, tangent, compaction, eq = response.finish(bulk, G)
         moved = np.flatnonzero(kappa != kappa_n)
@@ -307,6 +306,33 @@ class CapModel(IsotropicElasticity):
                      "eps_p_vol": state["eps_p_vol"] - compaction,
                      "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": response.code}
         return sigma, tangent, new_state
+
+    def _fixed_vertices(self, trial, bulk, apex, cap_corner, L_n, last, response):
+        """The stress at the fixed vertices: the failure surface's lowest point (apex, or
+        corner with the cut-off) at the points ``apex``, the corner (L, F(L)) with a cap
+        that never retreats at the points ``cap_corner``.
+
+        A vertex's own tangent has no bulk stiffness (every trial in its normal cone
+        returns to it). At the foot of a short stretch of failure surface between the two
+        vertices (a point near the surface of a soil without strength at zero stress,
+        where L is small) a point under those tangents goes from one vertex to the other
+        in every Newton iterate, past the solution on the stretch between them, and the
+        load step stalls. A point that was at the other vertex at the last iterate
+        (``last``: yield states) therefore gets the tangent of that stretch, the failure
+        surface's (:meth:`_failure_return`'s sensitivities at the vertex); a point that
+        stays at its vertex has the vertex's own."""
+        G = self.G
+        p = np.where(apex, self.lowest[0], L_n / 3.0)
+        F, dF, d2F = self.failure(3.0 * p)
+        crossed = (apex & (last == CAP_CORNER)) | (cap_corner & (last == APEX))
+        with np.errstate(all="ignore"):
+            dg = bulk.compliance(p) + 9.0 * (dF**2 - d2F * (trial.J_tr - F)) / G
+        p_e = np.where(crossed, 1.0 / dg, 0.0)
+        p_J = np.where(crossed, 3.0 * dF / (G * dg), 0.0)
+        for at, code in ((apex, APEX), (cap_corner, CAP_CORNER)):
+            k = np.flatnonzero(at)
+            response.solved(k, p[k], np.maximum(F[k], 0.0), p_e[k], p_J[k], 3.0 * dF[k] * p_e[k],
+                            3.0 * dF[k] * p_J[k], code)
 
     def _failure_return(self, trial, bulk, idx, p_lo, p_hi, response):
         """Return onto the failure surface (perfectly plastic): dgamma = (J_tr - J)/G,
