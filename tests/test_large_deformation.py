@@ -227,6 +227,12 @@ def test_force_control_until_collapse_ends_where_the_travel_runs_away():
              for k, (p, w) in enumerate([(10.0, 1e-3), (20.0, 0.051), (20.5, 0.061)])]
     assert limit(curve[:1]) is None and limit(curve[:2]) is None
     assert "the soil's limit: at load 20.5" in limit(curve)
+    # A first step cut to 1 psi and stiffer than what follows (a soil that is stiff only at
+    # first) does not set the scale: the secant at the first nominal step (10 psi) does.
+    soft = [StepRecord(k + 1, p / 100.0, w, p, 1, 0, 0, 0.0, (), {"pressure": p})
+            for k, (p, w) in enumerate([(1.0, 1e-5), (10.0, 0.01), (20.0, 0.05), (21.0, 0.9)])]
+    assert limit(soft[:3]) is None
+    assert "the soil's limit: at load 21" in limit(soft)
     assert collapse_limit(load_scene(SCENES / "strip-load-von-mises.toml",
                                      ["loading.until_collapse=false"])) is None
     assert collapse_limit(load_scene(SCENES / "strip-footing-von-mises.toml")) is None
