@@ -94,3 +94,17 @@ def test_force_controlled_run_lands_on_the_stated_loads_and_draws_the_sections(t
     assert [f for _, f in rows] == pytest.approx([50.0 * factor for factor, _ in rows], rel=1e-9)
     assert 20.0 in [round(f, 9) for _, f in rows] and rows[-1][1] == pytest.approx(50.0)
     assert (tmp_path / "sections-20.png").is_file() and (tmp_path / "sections-50.png").is_file()
+
+
+def test_the_tine_is_factorised_by_ldlt_where_its_jacobian_is_symmetric():
+    """Small strain: LDLᵀ for every iterate of the bonded tool in associated Drucker–Prager
+    soil, LU for the iterates where a point slips on the Mohr–Coulomb interface (and where
+    the cap's tangent, unsymmetric with its compaction hardening, is); the curves are LU's."""
+    soil = "regions.soil=drucker_prager"
+    for bonded, symmetric_everywhere in (("true", True), ("false", False)):
+        lu, reference = solve(f"tool.bonded={bonded}", soil, "solver.linear=lu")
+        auto, last = solve(f"tool.bonded={bonded}", soil)
+        linear = auto.newton.linear
+        assert linear.description == "MUMPS LDLT"
+        assert (linear.stats["unsymmetric_solves"] == 0) == symmetric_everywhere
+        assert last.force == pytest.approx(reference.force, rel=1e-6)

@@ -31,8 +31,8 @@ def test_every_linear_solver_gives_the_same_curve():
     assert problem.newton.linear.stats["unsymmetric_solves"] == 0   # von Mises: symmetric
 
 
-def test_auto_takes_lu_for_the_unsymmetric_interface():
-    problem = make_problem("tine-2in-90deg")
+def test_auto_takes_lu_in_large_deformation():
+    problem = make_problem("tine-2in-90deg", "analysis.large_deformation=true")
     assert problem.newton.linear.description == "MUMPS LU"
 
 

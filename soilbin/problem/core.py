@@ -72,14 +72,17 @@ class SoilProblem:
         jacobian = self.kinematics.jacobian(residual, self.points,
                                             ufl.TrialFunction(self.disc.space), v)
         tool = self.tool
-        # symmetric Jacobian: small strain, no tool, and a symmetric material tangent
-        symmetric = not self.kinematics.incremental and tool is None
+        # symmetric Jacobian: small strain, and symmetric material and interface tangents
+        # at the iterate (the border of a force-controlled tool is eliminated apart)
+        def symmetric_tangent():
+            return self.points.tangent_symmetric() and (
+                tool is None or tool.interface.tangent_symmetric())
         newton = NewtonSolver(self.comm, residual, jacobian, self.w, self.bcs,
                               self.update_material_state, self.scene.solver, self.disc,
                               nodal_terms=tool.nodal_terms if tool else [],
                               border=tool if tool and tool.force_controlled else None,
-                              symmetric=symmetric,
-                              symmetric_tangent=self.points.tangent_symmetric)
+                              symmetric=not self.kinematics.incremental,
+                              symmetric_tangent=symmetric_tangent)
         if dead is not None:   # loads present from the start set the force scale
             newton.include_force_scale(vector_norm(dead))
         return newton

@@ -112,6 +112,14 @@ class RigidToolContact:
         self._traction, self._tangent, self.trial = self.law.traction_update(
             self.jump(), self.normals, self.committed)
 
+    def tangent_symmetric(self):
+        """Whether the law's tangent at every contact point of every rank is symmetric (a
+        slipping Mohr–Coulomb point's is not)."""
+        t = self._tangent
+        scale = np.abs(t).max(initial=0.0)
+        local = np.allclose(t, t.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * scale)
+        return self.comm.allreduce(local, op=MPI.LAND)
+
     def add_residual(self, b):
         """Residual (internal − external) += A t at the owned, free dofs."""
         forces = self.areas[:, None] * self._traction * self._free

@@ -5,11 +5,12 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
 
 * ``lu``: MUMPS LU.
 * ``cholesky``: MUMPS LDLᵀ (symmetric indefinite: the mean-dilatation
-  systems are saddle points). It needs a symmetric Jacobian: small strain,
-  no interface (a bonded tool is fine), and a symmetric material tangent,
-  which is checked at every iterate; an iterate that fails the check, and
-  every iterate of a scene that cannot be symmetric, is solved by LU instead
-  (``stats["unsymmetric_solves"]`` counts them).
+  systems are saddle points). It needs a symmetric Jacobian: small strain
+  and symmetric material and interface tangents (no point slipping on a
+  Mohr–Coulomb interface; a bonded tool is fine), which is checked at every
+  iterate; an iterate that fails the check, and every iterate of a scene that
+  cannot be symmetric, is solved by LU instead (``stats["unsymmetric_solves"]``
+  counts them).
 * ``amg``: GMRES preconditioned by PETSc's smoothed aggregation (GAMG) with
   the six rigid-body modes as near-nullspace. ``hex8-bbar`` systems are
   condensed first (``condensation.CellCondensation``: the cell dilatation

@@ -101,7 +101,7 @@ class NewtonSolver:
         self._symmetric_tangent = symmetric_tangent
         n_dofs = w.vector.getSize()
         self.linear = LinearSolver(comm, options.linear, disc, n_dofs,
-                                   symmetric and border is None, prefix)
+                                   symmetric, prefix)
         self.stats = dict(constitutive_s=0.0, assembly_s=0.0, iterations=0, failed_iterations=0,
                           residual_evaluations=0)
         self._clock = _Clock(self.stats)

@@ -11,6 +11,7 @@ import basix
 import basix.cell
 import numpy as np
 import ufl
+from mpi4py import MPI
 from dolfinx import fem
 
 from ..elements import CELL
@@ -54,6 +55,7 @@ class MaterialPoints:
         self.strain = (fem.Function(self.stress.function_space, name="strain_q")
                        if keep_strain else None)
         self._w, self._w_committed = w, w_committed
+        self._comm = mesh.comm
         self._deps = fem.Expression(strain_increment, points)
         self._points = points
 
@@ -122,9 +124,10 @@ class MaterialPoints:
             self._tangent_frozen = all(m.linear for m in self.models.values())
 
     def tangent_symmetric(self):
-        """Whether the tangent at every point is symmetric (to round-off)."""
+        """Whether the tangent at every point of every rank is symmetric (to round-off)."""
         t = self._tangent
-        return np.allclose(t, t.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * np.abs(t).max())
+        local = np.allclose(t, t.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * np.abs(t).max())
+        return self._comm.allreduce(local, op=MPI.LAND)
 
     def _at_committed_state(self):
         return (self._converged_tangent is not None
