@@ -87,8 +87,9 @@ class Model(Params, abc.ABC):
         """(sigma, C_tan, new_state) for the strain increment ``deps`` (n, 6) from
         the committed ``state``; neither input is modified. ``guess``, if given, is
         the new state of a nearby increment from the same ``state`` (the last Newton
-        iterate's): an iterative return may start from it; the result does not
-        depend on it beyond the return's tolerance.
+        iterate's): an iterative return may start from it, and a tangent where the
+        return mode changed may differ (the caps' vertices); the stress and history
+        do not depend on it beyond the return's tolerance.
 
         Raises ReturnMapError when the result is not finite at some point.
         """
