@@ -38,6 +38,7 @@ STUDY = ROOT / "studies" / "chapter8.toml"
 SOILBIN = Path(sys.executable).with_name("soilbin")
 MARKERS = re.compile(r"(<!-- chapter8:start -->\n).*?(<!-- chapter8:end -->)", re.S)
 LOADS = (36.0, 72.0, 108.0)
+STEP_LOAD = 12.0   # lb, the study's load step
 KEYS = ("mesh.configuration", "mesh.tool_width", "mesh.rake_angle", "tool.bonded",
         "analysis.large_deformation")
 
@@ -81,10 +82,22 @@ def travel_at(rows, load):
     return f"{row['displacement']:.4g}" if row else "–"
 
 
+def softening(rows):
+    """Travel per pound of the last step over the secant travel per pound at the first
+    STEP_LOAD (what the limit criterion compares with 100)."""
+    first = next((r for r in rows if r["force"] >= STEP_LOAD * (1 - 1e-9)), None)
+    if first is None or len(rows) < 2:
+        return "–"
+    last, before = rows[-1], rows[-2]
+    per_lb = (last["displacement"] - before["displacement"]) / (last["force"] - before["force"])
+    return f"{per_lb / (first['displacement'] / first['force']):.3g}"
+
+
 def case_table(results):
-    lines = ["| tool | interface | deformation | travel at 36 / 72 / 108 lb [in] | lift at the "
-             "last step [lb] | estimate: cap surface / lab φ [lb] | status | Newton (steps) | wall (s) |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    lines = ["| tool | interface | deformation | travel at 36 / 72 / 108 lb [in] | last load [lb] "
+             "(travel per lb ÷ first 12 lb's) | lift at the last step [lb] | estimate: cap "
+             "surface / lab φ [lb] | status | Newton (steps) | wall (s) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for values, summary, rows, scene, _ in results:
         tool = (f"{values['mesh.tool_width']}-in, {values['mesh.rake_angle']}°, "
                 f"{values['mesh.configuration'].replace('_', ' ')}")
@@ -92,6 +105,7 @@ def case_table(results):
             f"| {tool}", "no" if values["tool.bonded"] == "true" else "yes",
             "large" if values["analysis.large_deformation"] == "true" else "small",
             " / ".join(travel_at(rows, load) for load in LOADS),
+            f"{rows[-1]['force']:.4g} ({softening(rows)})" if rows else "–",
             f"{rows[-1]['lift']:.3g}" if rows else "–",
             " / ".join(estimates(scene)), summary["status"],
             f"{summary['newton_iterations']} ({summary['n_steps']})", f"{summary['wall_s']:.0f} |"]))
@@ -103,7 +117,7 @@ def volume_change_table(results):
     picked = {values["analysis.large_deformation"]: rows for values, _, rows, _, _ in results
               if values["mesh.configuration"] == "embedded" and values["mesh.tool_width"] == "2"
               and values["mesh.rake_angle"] == "90" and values["tool.bonded"] == "false"}
-    loads = 12.0 * np.arange(8)
+    loads = STEP_LOAD * np.arange(8)
     increments = {}
     for large, rows in picked.items():
         force = [0.0] + [r["force"] for r in rows]
