@@ -66,7 +66,7 @@ class LinearSolver:
                     LinearSolverKind.CHOLESKY if symmetric else LinearSolverKind.LU)
         self.kind = kind
         self.stats = dict(factorisation_s=0.0, solve_s=0.0, solves=0, krylov_iterations=0,
-                          unsymmetric_solves=0)
+                          factorisations=0, unsymmetric_solves=0)
         self._lu = PETSc.KSP().create(comm)
         _mumps(self._lu, prefix + "lu_", "lu", n_dofs)
         self._condensed = None
@@ -99,7 +99,10 @@ class LinearSolver:
         if self.kind is LinearSolverKind.LU:
             return "MUMPS LU"
         if self.kind is LinearSolverKind.CHOLESKY:
-            return "MUMPS LDLT" + ("" if self._symmetric else " (LU: the Jacobian is unsymmetric)")
+            lu, every = self.stats["unsymmetric_solves"], self.stats["factorisations"]
+            if not self._symmetric or (lu and lu == every):
+                return "MUMPS LU (the Jacobian is unsymmetric)"
+            return "MUMPS LDLT" + (f", LU for {lu} of {every} iterates (unsymmetric)" if lu else "")
         return f"GMRES + GAMG ({self._condensed.description})"
 
     def set_operator(self, A, symmetric_tangent):
@@ -110,6 +113,7 @@ class LinearSolver:
             self.kind is LinearSolverKind.CHOLESKY and not (self._symmetric and symmetric_tangent()))
         if use_lu and self.kind is LinearSolverKind.CHOLESKY:
             self.stats["unsymmetric_solves"] += 1
+        self.stats["factorisations"] += 1
         self._active = self._lu if use_lu else self._ksp
         self._active.setOperators(A if self._condensed is None else self._condensed.condense(A))
         self._setup(self._active)
