@@ -17,6 +17,7 @@ from petsc4py import PETSc
 from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401
 
+from ..solver.linear_solver import all_symmetric
 from ..tensors import from_mandel
 
 
@@ -115,10 +116,7 @@ class RigidToolContact:
     def tangent_symmetric(self):
         """Whether the law's tangent at every contact point of every rank is symmetric (a
         slipping Mohr–Coulomb point's is not)."""
-        t = self._tangent
-        scale = np.abs(t).max(initial=0.0)
-        local = np.allclose(t, t.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * scale)
-        return self.comm.allreduce(local, op=MPI.LAND)
+        return all_symmetric(self._tangent, self.comm)
 
     def add_residual(self, b):
         """Residual (internal − external) += A t at the owned, free dofs."""

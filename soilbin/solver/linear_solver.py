@@ -23,6 +23,8 @@ one-element column: "no valid number of stages in multisector").
 """
 import time
 
+import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..errors import ConvergenceError, InputError
@@ -35,6 +37,14 @@ AMG_DOFS = 300_000
 PORD_DOFS = 5000
 #: Krylov tolerance relative to the right-hand side (Newton's rtol is 1e-9).
 KRYLOV_RTOL = 1e-10
+
+
+def all_symmetric(blocks, comm):
+    """Whether every (n, k, k) block on every rank is symmetric to round-off (the same
+    answer on all ranks: each takes the same factorisation)."""
+    scale = np.abs(blocks).max(initial=0.0)
+    local = np.allclose(blocks, blocks.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * scale)
+    return comm.allreduce(bool(local), op=MPI.LAND)
 
 
 class LinearSolveError(ConvergenceError):

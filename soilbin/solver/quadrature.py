@@ -11,11 +11,11 @@ import basix
 import basix.cell
 import numpy as np
 import ufl
-from mpi4py import MPI
 from dolfinx import fem
 
 from ..elements import CELL
 from ..tensors import from_mandel, to_mandel
+from .linear_solver import all_symmetric
 
 
 def quadrature_space(mesh, degree, shape=None):
@@ -125,9 +125,7 @@ class MaterialPoints:
 
     def tangent_symmetric(self):
         """Whether the tangent at every point of every rank is symmetric (to round-off)."""
-        t = self._tangent
-        local = np.allclose(t, t.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * np.abs(t).max())
-        return self._comm.allreduce(local, op=MPI.LAND)
+        return all_symmetric(self._tangent, self._comm)
 
     def _at_committed_state(self):
         return (self._converged_tangent is not None
