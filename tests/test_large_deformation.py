@@ -217,7 +217,6 @@ def test_collapse_pressure_is_where_the_settlement_per_step_blows_up():
     assert collapse_pressure(curve[:2] + [record(19.0, 0.052)]) == 19.0
 
 
-
 def test_force_control_until_collapse_ends_where_the_travel_runs_away():
     """The same criterion on the applied load ends a force-controlled run at its limit: the
     strip load (100 psi at load factor 1) stops at the 200x step, not at the 50x one."""
@@ -236,6 +235,7 @@ def test_force_control_until_collapse_ends_where_the_travel_runs_away():
     assert collapse_limit(load_scene(SCENES / "strip-load-von-mises.toml",
                                      ["loading.until_collapse=false"])) is None
     assert collapse_limit(load_scene(SCENES / "strip-footing-von-mises.toml")) is None
+
 
 ROUGH_PLATENS = """
 title = "block between rough platens, Drucker-Prager"

@@ -320,8 +320,8 @@ def test_a_warm_start_from_any_guess_gives_the_cold_return(model):
     """The cap return may start from a guess state (the last Newton iterate's): from a
     nearby increment's, from a far one's and from one of another step, the stress and
     tangent (but at a point that crossed between vertices: next test) are those of the
-    return from the trial state, to its tolerance (normally
-    consolidated K0 states, as in the tool scenes)."""
+    return from the trial state, to its tolerance (normally consolidated K0 states, as in
+    the tool scenes)."""
     model = dataclasses.replace(model, X0=0.0)
     rng = np.random.default_rng(7)
     n = 400

@@ -98,11 +98,11 @@ def test_force_controlled_run_lands_on_the_stated_loads_and_draws_the_sections(t
 
 def test_the_tine_is_factorised_by_ldlt_where_its_jacobian_is_symmetric():
     """Small strain: LDLᵀ for every iterate of the bonded tool in associated Drucker–Prager
-    soil, LU for the iterates where a point slips on the Mohr–Coulomb interface (and where
-    the cap's tangent, unsymmetric with its compaction hardening, is); the curves are LU's."""
+    soil, LU for the iterates where a point slips on the Mohr–Coulomb interface (and for
+    the cap soils, whose tangent is unsymmetric); the curves are LU's."""
     soil = "regions.soil=drucker_prager"
     for bonded, symmetric_everywhere in (("true", True), ("false", False)):
-        lu, reference = solve(f"tool.bonded={bonded}", soil, "solver.linear=lu")
+        _, reference = solve(f"tool.bonded={bonded}", soil, "solver.linear=lu")
         auto, last = solve(f"tool.bonded={bonded}", soil)
         linear = auto.newton.linear
         lu_iterates = linear.stats["unsymmetric_solves"]
