@@ -6,7 +6,7 @@ from petsc4py import PETSc
 from conftest import make_problem
 from soilbin.errors import ConvergenceError
 from soilbin.solver.condensation import CellCondensation
-from soilbin.solver.newton import NewtonFailure
+from soilbin.solver.newton import CP_TOLERANCE, NewtonFailure
 from soilbin.solver.stepping import run_load_steps
 
 # the footing before collapse, plastic under the edge: 4 steps to 0.02 in
@@ -82,3 +82,25 @@ def test_a_diverging_step_is_cut_early():
     problem.roll_back()
     result = run_load_steps(problem, 1, 5, lambda r: None)   # cut until a step converges
     assert result.steps[0].cuts >= 1 and result.steps[0].failed_iterations >= failure.value.iterations
+
+
+def test_the_critical_point_line_search_stops_where_the_energy_is_stationary():
+    """From the start of a step that full Newton cannot take (the whole settlement at once),
+    the cp step ends where g(λ) = R(x + λ dx)·dx is within CP_TOLERANCE of g(0) = R(x)·dx,
+    or at the full step while the energy still falls; the step then converges."""
+    problem = make_problem("strip-footing-von-mises", "loading.steps=1", "solver.line_search=cp")
+    newton = problem.newton
+    problem.set_load_factor(1.0)
+    x = problem.w.vector.copy()
+    newton.residual(newton._b)
+    newton._newton_step()
+    g0 = -newton._b.dot(newton._dx)
+    assert g0 < 0.0                                     # a descent direction of the energy
+    full = x.copy()
+    full.axpy(1.0, newton._dx)
+    newton._critical_point(x, 0.0, 0.0)
+    g = newton._b.dot(newton._dx)
+    took_full_step = np.allclose(problem.w.vector.array, full.array, rtol=0, atol=1e-14)
+    assert abs(g) <= CP_TOLERANCE * abs(g0) or (g < 0.0 and took_full_step)
+    problem.roll_back()
+    assert problem.solve().iterations <= 25

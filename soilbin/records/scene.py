@@ -45,6 +45,7 @@ class Direction(enum.Enum):
 class LineSearch(enum.Enum):
     BASIC = "basic"   # full Newton steps: one constitutive update per iterate
     BACKTRACKING = "bt"
+    CRITICAL_POINT = "cp"   # the energy's stationary point along the Newton direction
 
 
 class LinearSolverKind(enum.Enum):
@@ -182,7 +183,8 @@ class Solver(Params):
                         doc="residual floor relative to the run's force scale")
     max_iterations: int = param(25, lo=1, hi=200, doc="Newton iterations before the step is cut")
     line_search: LineSearch = param(LineSearch.BACKTRACKING,
-                                    doc="basic (full steps) or bt (Armijo backtracking)")
+                                    doc="basic (full steps), bt (Armijo backtracking on the residual "
+                                        "norm) or cp (the energy's stationary point along the step)")
     linear: LinearSolverKind = param(LinearSolverKind.AUTO,
                                      doc="linear solver: auto, lu, cholesky (LDLT) or amg")
 
