@@ -1,0 +1,135 @@
+"""The 2-in tine in each soil model: run studies/tine-models.toml, write its README tables.
+
+Runs `soilbin study studies/tine-models.toml` (resumable), then reads each
+case's summary.json and curve.csv and prints, or with --readme writes between
+the README's tine-models and tine-dilatancy markers, per case: the load steps
+(cuts), the Newton iterations (per converged step, the first step's, and
+those of attempts that were cut), the draft at 0.1, 0.25 and 0.5 in of travel
+and the wall time. Draws tine-models.png (the three VII.5 soil models: the
+cases that set only the soil) and the study's own tine-dilatancy.png in the
+study folder; --figures DIR copies both there. Loads in lb, travel in in.
+"""
+import argparse
+import csv
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from soilbin.app.study import Figure, Outcome, draw_figures, load_study
+from soilbin.app.study_figures import curves_png
+
+ROOT = Path(__file__).resolve().parent.parent
+STUDY = ROOT / "studies" / "tine-models.toml"
+SOILBIN = Path(sys.executable).with_name("soilbin")
+TRAVELS = (0.1, 0.25, 0.5)
+SOILS = {"modified_cap": "modified cap, A = C = 5.6",
+         "dimaggio_sandler": "DiMaggio–Sandler, A = C = 5.6",
+         "drucker_prager": "Drucker–Prager"}
+DP = "materials.drucker_prager."
+
+
+def marked(name):
+    return re.compile(rf"(<!-- {name}:start -->\n).*?(<!-- {name}:end -->)", re.S)
+
+
+def outcomes(study, folder):
+    """(Outcome, curve rows) of every case that left a summary, in the study's order."""
+    for case in study.cases:
+        run = folder / case.name
+        try:
+            summary = json.loads((run / "summary.json").read_text())
+        except OSError:
+            continue
+        with open(run / "curve.csv") as f:
+            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        yield Outcome(case, summary["status"], summary, ran=False), rows
+
+
+def draft_at(rows, travel):
+    """The draft at this travel, linear between converged steps; '–' if not reached."""
+    travels = [0.0] + [r["displacement"] for r in rows]
+    if travels[-1] < travel * (1.0 - 1e-9):
+        return "–"
+    return f"{np.interp(travel, travels, [0.0] + [r['force'] for r in rows]):.3g}"
+
+
+def row(name, outcome, rows):
+    summary = outcome.summary
+    steps, newton = summary["n_steps"], summary["newton_iterations"]
+    per_step = f"{newton / steps:.1f}; first step {int(rows[0]['newton_iterations'])}" if rows else "–"
+    cuts = sum(int(r["cuts"]) for r in rows)
+    stopped = "" if summary["status"] == "complete" else f", stopped at {rows[-1]['displacement']:.3g} in" if rows else ""
+    return (f"| {name} | {steps}{f' ({cuts} cuts)' if cuts else ''}{stopped} | {newton} ({per_step}) "
+            f"| {summary['failed_newton_iterations']} | "
+            + " / ".join(draft_at(rows, t) for t in TRAVELS) + f" | {summary['wall_s']:.0f} |")
+
+
+HEADER = ("| {} | steps | Newton iterations (per step) | in cut attempts | draft at 0.1 / 0.25 / "
+          "0.5 in [lb] | wall (s) |\n| --- | --- | --- | --- | --- | --- |")
+
+
+def models_table(results):
+    lines = [HEADER.format("soil")]
+    for outcome, rows in results:
+        values = outcome.case.values
+        if not any(key.startswith(DP) for key in values):
+            name = SOILS[values["regions.soil"]]
+            if values["regions.soil"] == "drucker_prager":
+                name += ", c = 0, ψ = φ"
+            lines.append(row(name, outcome, rows))
+    return "\n".join(lines)
+
+
+def dilatancy_table(results):
+    lines = [HEADER.format("Drucker–Prager")]
+    for outcome, rows in results:
+        values = outcome.case.values
+        if values["regions.soil"] == "drucker_prager":
+            c, psi = values.get(DP + "c", 0.0), values.get(DP + "psi", None)
+            dilation = "ψ = φ = 33°" if psi in (None, 33.0) else f"ψ = {psi:g}°"
+            lines.append(row(f"c = {c:g} psi, {dilation}", outcome, rows))
+    return "\n".join(lines)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "runs" / "tine-models")
+    parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument("--readme", type=Path, help="write the tables into this file")
+    parser.add_argument("--figures", type=Path, help="copy the two figures into this folder")
+    parser.add_argument("--no-run", action="store_true",
+                        help="only the tables, from the cases finished so far")
+    args = parser.parse_args()
+    if not args.no_run:
+        subprocess.run([SOILBIN, "study", STUDY, "--out", args.out, "--jobs", str(args.jobs)],
+                       cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    study = load_study(STUDY)
+    results = list(outcomes(study, args.out))
+    draw_figures(study, [outcome for outcome, _ in results], args.out)
+    models = [outcome for outcome, _ in results
+              if not any(key.startswith(DP) for key in outcome.case.values)]
+    curves_png(Figure(name="tine-models", title="2-in vertical tine in the VII.5 soil models"),
+               models, study, args.out)
+    tables = {"tine-models": models_table(results), "tine-dilatancy": dilatancy_table(results)}
+    for name, text in tables.items():
+        print(text + "\n")
+    if args.figures:
+        for name in tables:
+            shutil.copy(args.out / f"{name}.png", args.figures / f"{name}.png")
+    if args.readme:
+        readme = args.readme.read_text()
+        for name, text in tables.items():
+            if not marked(name).search(readme):
+                sys.exit(f"{args.readme}: no {name} markers")
+            readme = marked(name).sub(lambda m: m[1] + text + "\n" + m[2], readme)
+        args.readme.write_text(readme)
+
+
+if __name__ == "__main__":
+    main()
