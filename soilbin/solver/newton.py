@@ -89,8 +89,9 @@ class NewtonSolver:
         """``before_residual()`` runs after ``w`` is set to an iterate, before assembly;
         ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``);
         ``border``, if given, carries the extra scalar unknown (see the module docstring):
-        ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d, and
-        ``value``/``set_value(a)``; ``symmetric``: whether the Jacobian can be symmetric
+        ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d,
+        ``value``/``set_value(a)``, and ``share`` (g times it is the energy's derivative
+        in a); ``symmetric``: whether the Jacobian can be symmetric
         (then ``symmetric_tangent()`` says whether it is at the current iterate)."""
         self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
@@ -253,11 +254,14 @@ class NewtonSolver:
             norm = self.residual(self._b)
         return norm
 
-    def _slope(self, da):
-        """g = R·dx (+ g_border da): the derivative of the energy along the Newton step, for
-        the residual in ``self._b``."""
-        slope = self._b.dot(self._dx)
-        return slope + self._border_g * da if self._border is not None else slope
+    def _slope(self, da, sign=1.0):
+        """g = R·dx + share g_border da, the derivative of the energy along the Newton step
+        (the border's equation times ``border.share`` is the energy's derivative in its
+        unknown), for ``sign`` R in ``self._b``."""
+        slope = sign * self._b.dot(self._dx)
+        if self._border is not None:
+            slope += self._border.share * self._border_g * da
+        return slope
 
     def _critical_point(self, x, a, da):
         """The step λ where the energy is stationary along dx, g(λ) = R(x + λ dx)·dx = 0,
@@ -266,7 +270,7 @@ class NewtonSolver:
         bracket [0, 1], a trial step where the local return fails bisected toward the
         bracket's lower end. It does not need ‖R‖ to fall: where points change mode
         (elastic, cap, corner) the residual norm rises along steps that lower the energy."""
-        g0 = -self._slope(da)          # self._b holds −R(x), the Newton right-hand side
+        g0 = self._slope(da, sign=-1.0)   # self._b holds −R(x), the Newton right-hand side
         lo, g_lo, hi, g_hi, step = 0.0, g0, None, None, 1.0
         for _ in range(CP_TRIALS):
             self._set_iterate(x, a, self._dx, da, step)
