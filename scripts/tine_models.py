@@ -5,8 +5,8 @@ case's summary.json and curve.csv and prints, or with --readme writes between
 the README's tine-models and tine-dilatancy markers, per case: the load steps
 (cuts), the Newton iterations (per converged step, the first step's, and
 those of attempts that were cut), the draft at 0.1, 0.25 and 0.5 in of travel
-and the wall time. Draws tine-models.png (the three VII.5 soil models: the
-cases that set only the soil) and the study's own tine-dilatancy.png in the
+and the wall time. Draws tine-models.png (the three VII.5 soil models, Drucker–
+Prager as in the scene: c = 0, psi = phi) and the study's own tine-dilatancy.png in the
 study folder; --figures DIR copies both there. Loads in lb, travel in in.
 """
 import argparse
@@ -74,13 +74,18 @@ HEADER = ("| {} | steps | Newton iterations (per step) | in cut attempts | draft
           "0.5 in [lb] | wall (s) |\n| --- | --- | --- | --- | --- | --- |")
 
 
+def soil_model(outcome):
+    """Whether the case is one of the soil models as the scene has them."""
+    values = outcome.case.values
+    return values["regions.soil"] != "drucker_prager" or (values[DP + "c"], values[DP + "psi"]) == (0.0, 33.0)
+
+
 def models_table(results):
     lines = [HEADER.format("soil")]
     for outcome, rows in results:
-        values = outcome.case.values
-        if not any(key.startswith(DP) for key in values):
-            name = SOILS[values["regions.soil"]]
-            if values["regions.soil"] == "drucker_prager":
+        if soil_model(outcome):
+            name = SOILS[outcome.case.values["regions.soil"]]
+            if outcome.case.values["regions.soil"] == "drucker_prager":
                 name += ", c = 0, ψ = φ"
             lines.append(row(name, outcome, rows))
     return "\n".join(lines)
@@ -91,9 +96,9 @@ def dilatancy_table(results):
     for outcome, rows in results:
         values = outcome.case.values
         if values["regions.soil"] == "drucker_prager":
-            c, psi = values.get(DP + "c", 0.0), values.get(DP + "psi", None)
-            dilation = "ψ = φ = 33°" if psi in (None, 33.0) else f"ψ = {psi:g}°"
-            lines.append(row(f"c = {c:g} psi, {dilation}", outcome, rows))
+            psi = values[DP + "psi"]
+            dilation = "ψ = φ = 33°" if psi == 33.0 else f"ψ = {psi:g}°"
+            lines.append(row(f"c = {values[DP + 'c']:g} psi, {dilation}", outcome, rows))
     return "\n".join(lines)
 
 
@@ -112,8 +117,7 @@ def main():
     study = load_study(STUDY)
     results = list(outcomes(study, args.out))
     draw_figures(study, [outcome for outcome, _ in results], args.out)
-    models = [outcome for outcome, _ in results
-              if not any(key.startswith(DP) for key in outcome.case.values)]
+    models = [outcome for outcome, _ in results if soil_model(outcome)]
     curves_png(Figure(name="tine-models", title="2-in vertical tine in the VII.5 soil models"),
                models, study, args.out)
     tables = {"tine-models": models_table(results), "tine-dilatancy": dilatancy_table(results)}
