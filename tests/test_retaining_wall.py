@@ -98,7 +98,7 @@ def test_mean_dilatation_drives_points_to_the_apex_and_locks(solve_file):
 
 def test_rough_wall_lies_between_the_lower_bound_and_coulombs_wedge(solve, tmp_path):
     """The wall's vertical displacement held too: the soil sticks to it, so the friction it
-    mobilises is the soil's own (δ up to φ). Kp (normal component, 10.4 measured at φ = 35°)
+    mobilises is the soil's own (δ up to φ). Kp (normal component, 8.47 measured at φ = 35°)
     lies above Lancellotta's lower bound for δ = φ (7.25) and below Coulomb's plane wedge
     (18.8, which overestimates for large δ)."""
     from soilbin.closed_form import narrow_tine_draft
