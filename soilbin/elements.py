@@ -16,7 +16,7 @@ class Element(enum.Enum):
 
     ``hex8-reduced`` is the trilinear brick integrated at its centre only (uniform
     reduced integration): the model sees one strain per cell, so the volume change
-    that associated flow ties to the shear (ε_v = tan ψ γ in plane strain) is met
+    that associated flow ties to the shear (ε̇_v = sin ψ γ̇_max in plane strain) is met
     where the shear is measured. With 2 x 2 x 2 points, hex8 and hex8-bbar must
     meet it at every point of a cell whose shear varies (hex8-bbar with one
     dilatation for all of them): points with less shear than the cell's dilatation

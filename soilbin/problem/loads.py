@@ -34,19 +34,19 @@ def facets(tagged, name):
 def probe(disc, tagged, boundaries, vector, supports):
     """A function of the unknown's space equal to ``vector`` (dof components: the scene's
     axes) on the displacement dofs of the named boundaries and zero elsewhere: the virtual
-    displacement that reads a resultant. At a dof the ``supports`` hold it is the
+    displacement that reads a resultant. At a dof the ``supports`` hold it is scaled by the
     boundaries' share of the dof's tributary area (module doc)."""
     V, tdim = disc.displacement_space, disc.mesh.topology.dim
     field = fem.Function(disc.space)
     for i in np.flatnonzero(vector):
-        for name in boundaries:
-            dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
-            field.x.array[dofs] = vector[i]
-        shared = np.intersect1d(np.flatnonzero(field.x.array), supports.held)
-        if shared.size:
-            own = tributary_area(disc, tagged, boundaries, i)
-            both = tributary_area(disc, tagged, tuple(boundaries) + supports.holding[i], i)
-            field.x.array[shared] *= own[shared] / both[shared]
+        dofs = np.concatenate([fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
+                               for name in boundaries])
+        share = 1.0
+        if supports.holding[i]:   # the scene's, the same on every rank: collective
+            own = tributary_area(disc, tagged, boundaries, i)[dofs]
+            both = tributary_area(disc, tagged, tuple(boundaries) + supports.holding[i], i)[dofs]
+            share = np.where(np.isin(dofs, supports.held), own / both, 1.0)
+        field.x.array[dofs] = vector[i] * share
     field.x.scatter_forward()
     return field
 
@@ -84,7 +84,8 @@ class Supports:
         self._moving = []   # (Constant, coefficient of the prescribed displacement)
         self.bcs = []
         located = []        # (dofs, component, coefficient)
-        for boundary, axes in self._constraints(scene).items():
+        constraints = self._constraints(scene)
+        for boundary, axes in constraints.items():
             for i, coefficient in axes.items():
                 dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, boundary))
                 located.append((dofs, i, coefficient))
@@ -92,8 +93,8 @@ class Supports:
         self.held = np.unique(np.concatenate(
             [np.empty(0, np.int32)] + [dofs for dofs, _, coefficient in located if coefficient == 0.0]))
         #: Per component, the facet groups that hold it at zero.
-        self.holding = tuple(tuple(b for b, axes in self._constraints(scene).items()
-                                   if axes.get(i) == 0.0) for i in range(3))
+        self.holding = tuple(tuple(b for b, axes in constraints.items() if axes.get(i) == 0.0)
+                             for i in range(3))
         for dofs, i, coefficient in located:
             value = fem.Constant(mesh, PETSc.ScalarType(0.0))
             if coefficient != 0.0:
