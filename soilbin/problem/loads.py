@@ -12,8 +12,8 @@ a wall pushed over soil held below it): only the boundary's other nodes move.
 The force counts such a node's reaction in proportion to its tributary area on
 the driven boundary over that on the boundary and the supports holding it (a
 half at the toe of a wall on a uniform mesh): the reaction is the traction
-integrated against the node's shape function over both, and the lumped split
-is exact where the traction is continuous.
+integrated against the node's shape function over both, and this split of it
+is exact where the traction is uniform about the node, O(h²) where smooth.
 """
 import numpy as np
 import ufl
