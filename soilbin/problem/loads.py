@@ -8,14 +8,18 @@ direction: the force is the internal force of the soil on the boundary's
 dofs (the reaction under displacement control, the applied load at
 equilibrium under force control). A node that a support holds in a component
 stays held in it where the driven boundary meets the support (e.g. the toe of
-a wall pushed over soil held below it): only the boundary's other nodes move,
-and the force is read on those.
+a wall pushed over soil held below it): only the boundary's other nodes move.
+The force counts such a node's reaction in proportion to its tributary area on
+the driven boundary over that on the boundary and the supports holding it (a
+half at the toe of a wall on a uniform mesh): the reaction is the traction
+integrated against the node's shape function over both, and this split of it
+is exact where the traction is uniform about the node, O(h²) where smooth.
 """
 import numpy as np
 import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
-from dolfinx import fem
+from dolfinx import fem, la
 import dolfinx.fem.petsc  # noqa: F401
 
 from ..records.scene import TOOL, Control
@@ -27,19 +31,38 @@ def facets(tagged, name):
     return tagged.facet_tags.find(tagged.boundaries[name])
 
 
-def probe(disc, tagged, boundaries, vector, held):
+def probe(disc, tagged, boundaries, vector, supports):
     """A function of the unknown's space equal to ``vector`` (dof components: the scene's
-    axes) on the displacement dofs of the named boundaries, except the dofs ``held`` by
-    supports, and zero elsewhere: the virtual displacement that reads a resultant."""
+    axes) on the displacement dofs of the named boundaries and zero elsewhere: the virtual
+    displacement that reads a resultant. At a dof the ``supports`` hold it is scaled by the
+    boundaries' share of the dof's tributary area (module doc)."""
     V, tdim = disc.displacement_space, disc.mesh.topology.dim
     field = fem.Function(disc.space)
     for i in np.flatnonzero(vector):
-        for name in boundaries:
-            dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
-            field.x.array[dofs] = vector[i]
-    field.x.array[held] = 0.0
+        dofs = np.concatenate([fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
+                               for name in boundaries])
+        share = 1.0
+        if supports.holding[i]:   # the scene's, the same on every rank: collective
+            own = tributary_area(disc, tagged, boundaries, i)[dofs]
+            both = tributary_area(disc, tagged, tuple(boundaries) + supports.holding[i], i)[dofs]
+            share = np.where(np.isin(dofs, supports.held), own / both, 1.0)
+        field.x.array[dofs] = vector[i] * share
     field.x.scatter_forward()
     return field
+
+
+def tributary_area(disc, tagged, boundaries, component):
+    """∫ N_j dA over the named facet groups for every dof j of the displacement
+    ``component``, in the unknown's numbering (zero at the other dofs)."""
+    space, to_parent = disc.displacement_space.sub(component).collapse()
+    ds = disc.facet_measure(tagged.facet_tags)(tuple(tagged.boundaries[n] for n in boundaries))
+    area = fem.assemble_vector(fem.form(ufl.TestFunction(space) * ds))
+    area.scatter_reverse(la.ScatterMode.add)
+    area.scatter_forward()
+    dofs = disc.space.dofmap.index_map
+    out = np.zeros((dofs.size_local + dofs.num_ghosts) * disc.space.dofmap.index_map_bs)
+    out[np.asarray(to_parent)] = area.array
+    return out
 
 
 def traction(disc, kinematics, magnitude, vector, measure, v):
@@ -61,13 +84,17 @@ class Supports:
         self._moving = []   # (Constant, coefficient of the prescribed displacement)
         self.bcs = []
         located = []        # (dofs, component, coefficient)
-        for boundary, axes in self._constraints(scene).items():
+        constraints = self._constraints(scene)
+        for boundary, axes in constraints.items():
             for i, coefficient in axes.items():
                 dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, boundary))
                 located.append((dofs, i, coefficient))
         #: The dofs held at zero (every component: a dof index is one component's).
         self.held = np.unique(np.concatenate(
             [np.empty(0, np.int32)] + [dofs for dofs, _, coefficient in located if coefficient == 0.0]))
+        #: Per component, the facet groups that hold it at zero.
+        self.holding = tuple(tuple(b for b, axes in constraints.items() if axes.get(i) == 0.0)
+                             for i in range(3))
         for dofs, i, coefficient in located:
             value = fem.Constant(mesh, PETSc.ScalarType(0.0))
             if coefficient != 0.0:
@@ -131,8 +158,7 @@ class BoundaryLoad:
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))
         self.external = (traction(disc, kinematics, self._load, self.direction, self._ds, v)
                          if loading.control is Control.FORCE else None)
-        self._probe = probe(disc, tagged, (loading.boundary,), loading.direction.vector,
-                            supports.held)
+        self._probe = probe(disc, tagged, (loading.boundary,), loading.direction.vector, supports)
         self._v, self._force = v, None
         self._area = area_of(mesh, self._ds)
         self._displacement = fem.form(

@@ -160,7 +160,8 @@ class Tool(Params):
 
 @dataclasses.dataclass(frozen=True)
 class Analysis(Params):
-    element: Element = param(Element.HEX8, doc="hex8, hex8-bbar, hex27 or hex27-bbar (mean dilatation)")
+    element: Element = param(Element.HEX8, doc="hex8, hex8-reduced (one point per cell), hex8-bbar, hex27 or "
+                                              "hex27-bbar (mean dilatation)")
     plane_strain: bool = param(False, doc="hold the y displacement at zero everywhere (x-z plane)")
     large_deformation: bool = param(False, doc="updated Lagrangian with an objective stress update "
                                                "(geometric stiffness, moving mesh)")
