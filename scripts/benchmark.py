@@ -40,6 +40,9 @@ def cases(quick):
     for r in (1, 2) if quick else (1, 2, 3, 4):
         yield f"footing, refine={r}", FOOTING, [f"mesh.refine={r}"]
     yield "footing, refine=2, LU", FOOTING, ["mesh.refine=2", "solver.linear=lu"]
+    for r in (1, 2):   # the scene before its edge cells of 0.005 and the cp line search
+        yield (f"footing, refine={r}, edge_size=0.02, bt", FOOTING,
+               [f"mesh.refine={r}", "mesh.edge_size=0.02", "solver.line_search=bt"])
     yield "footing hex8, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"]
     if not quick:   # hex27-bbar takes minutes
         for r in (1, 2):
