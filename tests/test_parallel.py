@@ -1,6 +1,10 @@
 """Runs under `mpirun -n 2` give the same load-displacement curve as serial runs."""
 import csv
+import os
 import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -57,3 +61,45 @@ def test_force_controlled_tine_with_progress_lines_matches_serial(tmp_path):
         assert r1["force"] == pytest.approx(60.0 * r1["load_factor"], rel=1e-6)
         assert r2["force"] == pytest.approx(r1["force"], rel=1e-6)
         assert r2["displacement"] == pytest.approx(r1["displacement"], rel=1e-6)
+
+
+FAIL_ON_RANK_0 = """
+import sys
+sys.path.insert(0, {tests!r})
+from mpi4py import MPI
+from conftest import make_problem
+from soilbin.errors import ReturnMapError
+from soilbin.solver.newton import NewtonFailure
+
+problem = make_problem("strip-footing-von-mises", "mesh.edge_size=0.08", "loading.steps=4",
+                       "solver.line_search=bt")
+name, model = next(iter(problem.points.models.items()))
+update = model.update
+
+def failing(deps, state, guess=None):
+    if MPI.COMM_WORLD.rank == 0:
+        raise ReturnMapError("forced on rank 0")
+    return update(deps, state, guess=guess)
+
+object.__setattr__(model, "update", failing)
+problem.set_load_factor(0.25)
+try:
+    problem.solve()
+except NewtonFailure as err:
+    print(f"rank {{MPI.COMM_WORLD.rank}}: {{err}}", flush=True)
+"""
+
+
+@pytest.mark.slow
+def test_a_local_return_failing_on_one_rank_fails_the_iterate_on_every_rank(tmp_path):
+    """A ReturnMapError on rank 0 alone reaches rank 1 too (both cut the step, neither is
+    left waiting in an assembly: the run would hang)."""
+    script = tmp_path / "fail.py"
+    script.write_text(FAIL_ON_RANK_0.format(tests=str(Path(__file__).parent)))
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+    done = subprocess.run(["mpirun", "-n", "2", sys.executable, str(script)], capture_output=True,
+                          text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr
+    for rank in (0, 1):
+        assert f"rank {rank}: forced on rank 0" in done.stdout

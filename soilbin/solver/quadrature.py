@@ -14,6 +14,7 @@ import ufl
 from dolfinx import fem
 
 from ..elements import CELL
+from ..errors import ReturnMapError
 from ..tensors import from_mandel, to_mandel
 from .linear_solver import all_symmetric
 
@@ -91,7 +92,8 @@ class MaterialPoints:
         return self.evaluate(self._deps)
 
     def update(self):
-        """One constitutive update at the current iterate: σ, C_tan and trial history.
+        """One constitutive update at the current iterate: σ, C_tan and trial history;
+        ReturnMapError on every rank if a local return failed on any.
 
         At the committed state itself (the first iterate of a load step) the
         stress is the committed one and the tangent the last converged one, so
@@ -110,13 +112,21 @@ class MaterialPoints:
             deps = self.strain_increment()
             if self.strain is not None:
                 self.write(deps, self.strain)
-            for name, idx in self.index.items():
-                sigma, tangent, state = self.models[name].update(deps[idx], self.committed[name],
-                                                                 guess=self.trial[name])
-                self._stress[idx] = sigma
-                if not self._tangent_frozen:
-                    self._tangent[idx] = tangent
-                self.trial[name] = state
+            failure = ""
+            try:
+                for name, idx in self.index.items():
+                    sigma, tangent, state = self.models[name].update(
+                        deps[idx], self.committed[name], guess=self.trial[name])
+                    self._stress[idx] = sigma
+                    if not self._tangent_frozen:
+                        self._tangent[idx] = tangent
+                    self.trial[name] = state
+            except ReturnMapError as err:
+                failure = str(err)
+            # every rank stops together (a rank alone would leave the others in assembly)
+            failures = [f for f in self._comm.allgather(failure) if f]
+            if failures:
+                raise ReturnMapError(failures[0])
         self.write(self._stress, self.stress)
         if not self._tangent_frozen:
             self.write(self._tangent, self.tangent)
