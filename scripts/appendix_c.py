@@ -12,14 +12,16 @@ import sys
 from pathlib import Path
 
 import matplotlib
+
+from soilbin.models.cap import SECTION_VII5
+
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SOILBIN = Path(sys.executable).with_name("soilbin")
 OUT = ROOT / "runs" / "appendix-c"
-# VII.5 with A = 5.65 psi (a trace of strength at zero pressure, as in the container scene)
-PARAMETERS = dict(E=4000.0, nu=0.35, A=5.65, B=0.11, C=5.6, beta=0.062, R=2.0, W=0.18, D=0.05)
+PARAMETERS = SECTION_VII5   # as printed: A = C = 5.6 psi
 TESTS = {
     "hydrostatic": ["path.pressure=30", "path.unload=true"],
     "triaxial-compression": ["path.confining=10"],
