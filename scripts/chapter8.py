@@ -15,16 +15,11 @@ chapter8 markers:
   between converged steps where the adaptive steps did not land on one).
 Loads and travel in lb and in; the dissertation's figures 8.2-8.9 are the
 study's figure-8.*.png (drawn here too, of the cases finished so far),
-figures 8.10-8.12 each case's sections-*.png.
+figures 8.10-8.12 each case's sections-*.png; --figures DIR copies figures 8.2-8.9 there.
 """
-import argparse
 import csv
 import json
-import os
-import re
-import subprocess
-import sys
-from pathlib import Path
+import shutil
 
 import numpy as np
 
@@ -32,11 +27,9 @@ from soilbin.app.run import draft_estimate
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
 from soilbin.records.scene import load_scene
+from study_tables import ROOT, arguments, run_study, write_between_markers
 
-ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "chapter8.toml"
-SOILBIN = Path(sys.executable).with_name("soilbin")
-MARKERS = re.compile(r"(<!-- chapter8:start -->\n).*?(<!-- chapter8:end -->)", re.S)
 LOADS = (36.0, 72.0, 108.0)
 STEP_LOAD = 12.0   # lb, the study's load step
 KEYS = ("mesh.configuration", "mesh.tool_width", "mesh.rake_angle", "tool.bonded",
@@ -136,16 +129,8 @@ def volume_change_table(results):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=ROOT / "runs" / "chapter8")
-    parser.add_argument("--jobs", type=int, default=1)
-    parser.add_argument("--readme", type=Path, help="write the tables into this file")
-    parser.add_argument("--no-run", action="store_true",
-                        help="only the tables, from the cases finished so far")
-    args = parser.parse_args()
-    if not args.no_run:
-        subprocess.run([SOILBIN, "study", STUDY, "--out", args.out, "--jobs", str(args.jobs)],
-                       cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    args = arguments(__doc__, "chapter8")
+    run_study(STUDY, args)
     study = load_study(STUDY)
     results = list(cases(study, args.out))
     # the figures of the finished cases (the study draws them itself once all are done)
@@ -157,11 +142,11 @@ def main():
             "−3.03, −3.18; large −0.57, −1.47, −1.98, −2.88, −2.58, −4.87, −3.34):\n\n"
             + volume_change_table(results) + "\n")
     print(text)
+    if args.figures:
+        for figure in study.figures:
+            shutil.copy(args.out / f"{figure.name}.png", args.figures / f"{figure.name}.png")
     if args.readme:
-        readme = args.readme.read_text()
-        if not MARKERS.search(readme):
-            sys.exit(f"{args.readme}: no chapter8 markers")
-        args.readme.write_text(MARKERS.sub(lambda m: m[1] + text + m[2], readme))
+        write_between_markers(args.readme, "chapter8", text)
 
 
 if __name__ == "__main__":

@@ -9,33 +9,22 @@ and the wall time. Draws tine-models.png (the three VII.5 soil models, Drucker�
 Prager as in the scene: c = 0, psi = phi) and the study's own tine-dilatancy.png in the
 study folder; --figures DIR copies both there. Loads in lb, travel in in.
 """
-import argparse
 import csv
 import json
-import os
-import re
 import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 
 from soilbin.app.study import Figure, Outcome, draw_figures, load_study
 from soilbin.app.study_figures import curves_png
+from study_tables import ROOT, arguments, run_study, write_between_markers
 
-ROOT = Path(__file__).resolve().parent.parent
 STUDY = ROOT / "studies" / "tine-models.toml"
-SOILBIN = Path(sys.executable).with_name("soilbin")
 TRAVELS = (0.1, 0.25, 0.5)
 SOILS = {"modified_cap": "modified cap, A = C = 5.6",
          "dimaggio_sandler": "DiMaggio–Sandler, A = C = 5.6",
          "drucker_prager": "Drucker–Prager"}
 DP = "materials.drucker_prager."
-
-
-def marked(name):
-    return re.compile(rf"(<!-- {name}:start -->\n).*?(<!-- {name}:end -->)", re.S)
 
 
 def outcomes(study, folder):
@@ -103,17 +92,8 @@ def dilatancy_table(results):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=ROOT / "runs" / "tine-models")
-    parser.add_argument("--jobs", type=int, default=1)
-    parser.add_argument("--readme", type=Path, help="write the tables into this file")
-    parser.add_argument("--figures", type=Path, help="copy the two figures into this folder")
-    parser.add_argument("--no-run", action="store_true",
-                        help="only the tables, from the cases finished so far")
-    args = parser.parse_args()
-    if not args.no_run:
-        subprocess.run([SOILBIN, "study", STUDY, "--out", args.out, "--jobs", str(args.jobs)],
-                       cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    args = arguments(__doc__, "tine-models")
+    run_study(STUDY, args)
     study = load_study(STUDY)
     results = list(outcomes(study, args.out))
     draw_figures(study, [outcome for outcome, _ in results], args.out)
@@ -123,16 +103,10 @@ def main():
     tables = {"tine-models": models_table(results), "tine-dilatancy": dilatancy_table(results)}
     for name, text in tables.items():
         print(text + "\n")
-    if args.figures:
-        for name in tables:
+        if args.figures:
             shutil.copy(args.out / f"{name}.png", args.figures / f"{name}.png")
-    if args.readme:
-        readme = args.readme.read_text()
-        for name, text in tables.items():
-            if not marked(name).search(readme):
-                sys.exit(f"{args.readme}: no {name} markers")
-            readme = marked(name).sub(lambda m: m[1] + text + "\n" + m[2], readme)
-        args.readme.write_text(readme)
+        if args.readme:
+            write_between_markers(args.readme, name, text + "\n")
 
 
 if __name__ == "__main__":
