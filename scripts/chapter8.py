@@ -17,8 +17,6 @@ Loads and travel in lb and in; the dissertation's figures 8.2-8.9 are the
 study's figure-8.*.png (drawn here too, of the cases finished so far),
 figures 8.10-8.12 each case's sections-*.png; --figures DIR copies figures 8.2-8.9 there.
 """
-import csv
-import json
 import shutil
 
 import numpy as np
@@ -27,7 +25,7 @@ from soilbin.app.run import draft_estimate
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
 from soilbin.records.scene import load_scene
-from study_tables import ROOT, arguments, run_study, write_between_markers
+from study_tables import ROOT, arguments, finished, run_study, write_between_markers
 
 STUDY = ROOT / "studies" / "chapter8.toml"
 LOADS = (36.0, 72.0, 108.0)
@@ -37,22 +35,11 @@ KEYS = ("mesh.configuration", "mesh.tool_width", "mesh.rake_angle", "tool.bonded
 
 
 def cases(study, folder):
-    """(overrides dict, summary, curve rows, scene run, case) of every case of the study, in
-    its order, that left a summary in its folder (of this code or an earlier one: the
-    study itself decides what to run again)."""
-    for case in study.cases:
-        run = folder / case.name
-        try:
-            summary = json.loads((run / "summary.json").read_text())
-        except OSError:
-            continue
-        if summary["status"] == "interrupted":
-            continue
+    """(overrides dict, summary, curve rows, scene run, case) of every finished case."""
+    for case, summary, rows in finished(study, folder):
         values = dict(item.split("=", 1) for item in summary["overrides"])
-        with open(run / "curve.csv") as f:
-            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
         yield ({k: values[k].strip('"') for k in KEYS}, summary, rows,
-               load_scene(run / "scene.toml"), case)
+               load_scene(folder / case.name / "scene.toml"), case)
 
 
 def estimates(scene):

@@ -1,6 +1,8 @@
 """What the README-table scripts of a study share: their command line, the study run,
-and the text between a pair of README markers."""
+the finished cases' results, and the text between a pair of README markers."""
 import argparse
+import csv
+import json
 import os
 import re
 import subprocess
@@ -37,3 +39,20 @@ def write_between_markers(readme, name, text):
     if not markers.search(content):
         sys.exit(f"{readme}: no {name} markers")
     readme.write_text(markers.sub(lambda m: m[1] + text + m[2], content))
+
+
+def finished(study, folder):
+    """(case, summary, curve rows) of every case of the study, in its order, that left the
+    summary of a run that was not interrupted in its folder (of this code or an earlier
+    one: the study itself decides what to run again)."""
+    for case in study.cases:
+        run = folder / case.name
+        try:
+            summary = json.loads((run / "summary.json").read_text())
+        except OSError:
+            continue
+        if summary["status"] == "interrupted":
+            continue
+        with open(run / "curve.csv") as f:
+            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        yield case, summary, rows

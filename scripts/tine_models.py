@@ -9,15 +9,13 @@ and the wall time. Draws tine-models.png (the three VII.5 soil models, Druckerâ€
 Prager as in the scene: c = 0, psi = phi) and the study's own tine-dilatancy.png in the
 study folder; --figures DIR copies both there. Loads in lb, travel in in.
 """
-import csv
-import json
 import shutil
 
 import numpy as np
 
 from soilbin.app.study import Figure, Outcome, draw_figures, load_study
 from soilbin.app.study_figures import curves_png
-from study_tables import ROOT, arguments, run_study, write_between_markers
+from study_tables import ROOT, arguments, finished, run_study, write_between_markers
 
 STUDY = ROOT / "studies" / "tine-models.toml"
 TRAVELS = (0.1, 0.25, 0.5)
@@ -28,15 +26,8 @@ DP = "materials.drucker_prager."
 
 
 def outcomes(study, folder):
-    """(Outcome, curve rows) of every case that left a summary, in the study's order."""
-    for case in study.cases:
-        run = folder / case.name
-        try:
-            summary = json.loads((run / "summary.json").read_text())
-        except OSError:
-            continue
-        with open(run / "curve.csv") as f:
-            rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    """(Outcome, curve rows) of every finished case, in the study's order."""
+    for case, summary, rows in finished(study, folder):
         yield Outcome(case, summary["status"], summary, ran=False), rows
 
 
