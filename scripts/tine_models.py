@@ -5,9 +5,10 @@ case's summary.json and curve.csv and prints, or with --readme writes between
 the README's tine-models and tine-dilatancy markers, per case: the load steps
 (cuts), the Newton iterations (per converged step, the first step's, and
 those of attempts that were cut), the draft at 0.1, 0.25 and 0.5 in of travel
-and the wall time. Draws tine-models.png (the three VII.5 soil models, Drucker–
-Prager as in the scene: c = 0, psi = phi) and the study's own tine-dilatancy.png in the
-study folder; --figures DIR copies both there. Loads in lb, travel in in.
+and the wall time. Draws tine-models.png (the three VII.5 soil models,
+Drucker–Prager as in the scene: c = 0, psi = phi) and the study's own
+tine-dilatancy.png in the study folder; --figures DIR copies both there.
+Loads in lb, travel in in.
 """
 import shutil
 
@@ -21,7 +22,7 @@ STUDY = ROOT / "studies" / "tine-models.toml"
 TRAVELS = (0.1, 0.25, 0.5)
 SOILS = {"modified_cap": "modified cap, A = C = 5.6",
          "dimaggio_sandler": "DiMaggio–Sandler, A = C = 5.6",
-         "drucker_prager": "Drucker–Prager"}
+         "drucker_prager": "Drucker–Prager, c = 0, ψ = φ"}
 DP = "materials.drucker_prager."
 
 
@@ -41,12 +42,13 @@ def draft_at(rows, travel):
 
 def row(name, outcome, rows):
     summary = outcome.summary
-    steps, newton = summary["n_steps"], summary["newton_iterations"]
+    steps, newton, cuts = summary["n_steps"], summary["newton_iterations"], summary["cuts"]
     per_step = f"{newton / steps:.1f}; first step {int(rows[0]['newton_iterations'])}" if rows else "–"
-    cuts = sum(int(r["cuts"]) for r in rows)
-    stopped = "" if summary["status"] == "complete" else f", stopped at {rows[-1]['displacement']:.3g} in" if rows else ""
-    return (f"| {name} | {steps}{f' ({cuts} cuts)' if cuts else ''}{stopped} | {newton} ({per_step}) "
-            f"| {summary['failed_newton_iterations']} | "
+    if cuts:
+        steps = f"{steps} ({cuts} cuts)"
+    if summary["status"] != "complete" and rows:
+        steps = f"{steps}, stopped at {rows[-1]['displacement']:.3g} in"
+    return (f"| {name} | {steps} | {newton} ({per_step}) | {summary['failed_newton_iterations']} | "
             + " / ".join(draft_at(rows, t) for t in TRAVELS) + f" | {summary['wall_s']:.0f} |")
 
 
@@ -57,17 +59,15 @@ HEADER = ("| {} | steps | Newton iterations (per step) | in cut attempts | draft
 def soil_model(outcome):
     """Whether the case is one of the soil models as the scene has them."""
     values = outcome.case.values
-    return values["regions.soil"] != "drucker_prager" or (values[DP + "c"], values[DP + "psi"]) == (0.0, 33.0)
+    return (values["regions.soil"] != "drucker_prager"
+            or (values[DP + "c"], values[DP + "psi"]) == (0.0, 33.0))
 
 
 def models_table(results):
     lines = [HEADER.format("soil")]
     for outcome, rows in results:
         if soil_model(outcome):
-            name = SOILS[outcome.case.values["regions.soil"]]
-            if outcome.case.values["regions.soil"] == "drucker_prager":
-                name += ", c = 0, ψ = φ"
-            lines.append(row(name, outcome, rows))
+            lines.append(row(SOILS[outcome.case.values["regions.soil"]], outcome, rows))
     return "\n".join(lines)
 
 

@@ -37,32 +37,39 @@ def probe(disc, tagged, boundaries, vector, supports):
     displacement that reads a resultant. At a dof the ``supports`` hold it is scaled by the
     boundaries' share of the dof's tributary area (module doc)."""
     V, tdim = disc.displacement_space, disc.mesh.topology.dim
+    comm = disc.mesh.comm
     field = fem.Function(disc.space)
     for i in np.flatnonzero(vector):
         dofs = np.concatenate([fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
                                for name in boundaries])
+        held = np.isin(dofs, supports.held)
         share = 1.0
-        if supports.holding[i]:   # the scene's, the same on every rank: collective
-            own = tributary_area(disc, tagged, boundaries, i)[dofs]
-            both = tributary_area(disc, tagged, tuple(boundaries) + supports.holding[i], i)[dofs]
-            share = np.where(np.isin(dofs, supports.held), own / both, 1.0)
+        if comm.allreduce(bool(held.any()), op=MPI.LOR):   # collective: every rank assembles
+            own, support = tributary_areas(disc, tagged, (boundaries, supports.holding[i]), i)
+            share = np.where(held, own[dofs] / (own[dofs] + support[dofs]), 1.0)
         field.x.array[dofs] = vector[i] * share
     field.x.scatter_forward()
     return field
 
 
-def tributary_area(disc, tagged, boundaries, component):
-    """∫ N_j dA over the named facet groups for every dof j of the displacement
-    ``component``, in the unknown's numbering (zero at the other dofs)."""
+def tributary_areas(disc, tagged, groups, component):
+    """For each tuple of facet group names in ``groups``, ∫ N_j dA over those groups for
+    every dof j of the displacement ``component``, in the unknown's numbering (zero at the
+    other dofs)."""
     space, to_parent = disc.displacement_space.sub(component).collapse()
-    ds = disc.facet_measure(tagged.facet_tags)(tuple(tagged.boundaries[n] for n in boundaries))
-    area = fem.assemble_vector(fem.form(ufl.TestFunction(space) * ds))
-    area.scatter_reverse(la.ScatterMode.add)
-    area.scatter_forward()
     dofs = disc.space.dofmap.index_map
-    out = np.zeros((dofs.size_local + dofs.num_ghosts) * disc.space.dofmap.index_map_bs)
-    out[np.asarray(to_parent)] = area.array
-    return out
+    size = (dofs.size_local + dofs.num_ghosts) * disc.space.dofmap.index_map_bs
+    measure = disc.facet_measure(tagged.facet_tags)
+    areas = []
+    for names in groups:
+        area = fem.assemble_vector(fem.form(
+            ufl.TestFunction(space) * measure(tuple(tagged.boundaries[n] for n in names))))
+        area.scatter_reverse(la.ScatterMode.add)
+        area.scatter_forward()
+        out = np.zeros(size)
+        out[np.asarray(to_parent)] = area.array
+        areas.append(out)
+    return areas
 
 
 def traction(disc, kinematics, magnitude, vector, measure, v):
