@@ -57,8 +57,9 @@ def fraction(phi, delta):
     return f"{delta:.4g}°"
 
 
-def error(kp, reference):
-    return f"{100.0 * (kp / reference - 1.0):+.1f}%"
+def error(kp, reference, digits=1):
+    """The relative difference in percent, with a true minus sign."""
+    return f"{100.0 * (kp / reference - 1.0):+.{digits}f}%".replace("-", "−")
 
 
 def main_table(rough, k_default):
@@ -91,13 +92,13 @@ def smooth_table(rough, smooth, k_default):
         flat, rough_0 = smooth[phi, None, None, refine], rough.get((phi, 0.0, k_default, refine))
         if rough_0:
             a, b = flat.kp, rough_0.kp
-            lines.append(f"| {phi:g}° | {MESHES[refine]} | {a:.4f} | {b:.4f} | {error(b, a)} |")
+            lines.append(f"| {phi:g}° | {MESHES[refine]} | {a:.4f} | {b:.4f} | {error(b, a, 2)} |")
     return "\n".join(lines)
 
 
 def stiffness_table(rough, k_default):
     stiffnesses = sorted({k for _, _, k, _ in rough})
-    lines = ["| φ, δ | " + " | ".join(f"k_n = k_s = {k:.0e} pci" for k in stiffnesses) + " |",
+    lines = ["| φ, δ, mesh | " + " | ".join(f"k_n = k_s = {k:g} pci" for k in stiffnesses) + " |",
              "| --- " * (1 + len(stiffnesses)) + "|"]
     varied = sorted({(phi, delta) for phi, delta, k, _ in rough if k != k_default})
     for phi, delta in varied:

@@ -73,9 +73,9 @@ def headline_results(scene, records):
         Headline.FINAL_FORCE: lambda: records[-1].force,
         Headline.FINAL_PRESSURE: lambda: records[-1].columns["pressure"],
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
-        Headline.FINAL_LIFT: lambda: records[-1].columns["lift"],
         Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
         Headline.COLLAPSE_PRESSURE: lambda: collapse_pressure(records),
+        Headline.FINAL_LIFT: lambda: records[-1].columns["lift"],
     }
     values = {key: read[result.of]() for key, result in scene.headline.items()}
     return {key: None if value is None else value / scene.headline[key].divide_by

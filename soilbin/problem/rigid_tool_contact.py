@@ -143,6 +143,8 @@ class RigidToolContact:
             np.add.at(local.array, self.dofs.ravel(), forces.ravel())
 
     def add_jacobian(self, A):
+        if not len(self.dofs):   # no contact point on this rank (PETSc divides by the count)
+            return
         free = self._free[:, :, None] & self._free[:, None, :]
         blocks = self.areas[:, None, None] * self._tangent * free
         A.setValuesLocalRCV(self.dofs, self.dofs, blocks, addv=PETSc.InsertMode.ADD)

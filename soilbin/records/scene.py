@@ -374,13 +374,13 @@ def _parse(raw, path):
     analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
     _check_held(supports, loading, analysis, tool)
     headline = {}
+    unread, driven = ((BOUNDARY_HEADLINES, "a tool") if loading.boundary == TOOL
+                      else (TOOL_HEADLINES, "a loaded boundary"))
     for key, value in _optional(raw, "headline", dict).items():
         spec = value if isinstance(value, dict) else {"of": value}
         headline[key] = from_table(HeadlineResult, spec, f"headline.{key}")
-        unread = BOUNDARY_HEADLINES if loading.boundary == TOOL else TOOL_HEADLINES
         if headline[key].of in unread:
-            raise InputError(f"headline.{key}: {headline[key].of.value} is not read off "
-                             + ("a tool" if loading.boundary == TOOL else "a loaded boundary"))
+            raise InputError(f"headline.{key}: {headline[key].of.value} is not read off {driven}")
 
     if tool is not None and any(analysis.frame_rotation):
         raise InputError("analysis.frame_rotation: a scene with a tool cannot be rotated (the "
