@@ -61,10 +61,10 @@ class RigidTool:
         if self._comm.allreduce(len(self.interface.support_dofs), op=MPI.SUM):
             if self.force_controlled:
                 raise InputError(
-                    "loading.control = 'force': a support holds the soil against the tool's "
-                    f"travel on {', '.join(tool.faces)} (as at the toe of a wall); its reaction "
-                    "is in the tool's force but not in the draft's linearisation: use "
-                    "displacement control")
+                    f"loading.control = 'force': a support holds soil of tool.faces "
+                    f"{list(tool.faces)} against the tool's travel (as the support below a wall "
+                    "holds its toe); its reaction is in the tool's force but not in the draft's "
+                    "linearisation: use displacement control")
             self._reaction_probe = probe(disc, tagged, tool.faces, loading.direction.vector,
                                          supports, only=self.interface.support_dofs)
         # the contact points of each face: its nodes on the initial mesh (owned by this rank)
