@@ -25,10 +25,10 @@ def arguments(doc, name):
     return parser.parse_args()
 
 
-def run_study(study, args):
-    """`soilbin study` (resumable), unless --no-run."""
+def run_study(study, args, out=None):
+    """`soilbin study` into ``out`` (default: --out; resumable), unless --no-run."""
     if not args.no_run:
-        subprocess.run([SOILBIN, "study", study, "--out", args.out, "--jobs", str(args.jobs)],
+        subprocess.run([SOILBIN, "study", study, "--out", out or args.out, "--jobs", str(args.jobs)],
                        cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
 
 

@@ -108,3 +108,13 @@ def test_jaky_K0_of_the_critical_state_friction_angle(model):
 def test_jaky_K0_without_a_friction_angle_is_refused(overrides, message):
     with pytest.raises(InputError, match=re.escape(f"container-footing.toml: {message}")):
         load_scene(SCENES / "container-footing.toml", ["geostatic.K0=jaky", *overrides])
+
+
+@pytest.mark.parametrize("scene, headline, driven", [
+    ("retaining-wall-passive", "final_lift", "a loaded boundary"),
+    ("retaining-wall-passive-rough", "final_pressure", "a tool"),
+    ("retaining-wall-passive-rough", "collapse_pressure", "a tool")])
+def test_a_headline_is_read_off_what_the_scene_drives(scene, headline, driven):
+    """A loaded boundary has a pressure and no lift, a tool a lift and no pressure."""
+    with pytest.raises(InputError, match=f"headline.x: {headline} is not read off {driven}"):
+        load_scene(SCENES / f"{scene}.toml", [f"headline.x={headline}"])

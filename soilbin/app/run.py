@@ -75,6 +75,7 @@ def headline_results(scene, records):
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
         Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
         Headline.COLLAPSE_PRESSURE: lambda: collapse_pressure(records),
+        Headline.FINAL_LIFT: lambda: records[-1].columns["lift"],
     }
     values = {key: read[result.of]() for key, result in scene.headline.items()}
     return {key: None if value is None else value / scene.headline[key].divide_by
@@ -113,7 +114,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     run before the mesh is built); returns the summary dict (``overrides``: the --set items
     the scene was loaded with, echoed in it). SIGINT or SIGTERM during the steps ends the
     run with status "interrupted" (summary written, no collective call after it)."""
-    start = time.perf_counter()
+    start, start_cpu = time.perf_counter(), time.process_time()
     out_dir = prepare_on_rank0(comm, out_dir)
     with interrupt.kept():
         tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
@@ -169,6 +170,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "linear_solver": problem.newton.linear.description,
         "setup_s": round(setup_s, 3),
         "wall_s": round(time.perf_counter() - start, 3),
+        "cpu_s": round(time.process_time() - start_cpu, 3),
         **headline_results(scene, records),
     }
     try:

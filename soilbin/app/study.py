@@ -33,7 +33,7 @@ DONE = ("complete", "collapse")   # statuses of a case that reached its end
 #: Keys of every run summary (soilbin/run.py); a scene adds its headline keys.
 SUMMARY_KEYS = ("scene", "title", "units", "overrides", "status", "converged", "message",
                 "n_cells", "n_dofs", "n_ranks", "n_steps", "load_factor", "newton_iterations",
-                "failed_newton_iterations", "cuts", "linear_solver", "setup_s", "wall_s")
+                "failed_newton_iterations", "cuts", "linear_solver", "setup_s", "wall_s", "cpu_s")
 TABLE_TAIL = ("n_dofs", "newton_iterations", "wall_s")   # last columns of the default table
 TOP_LEVEL = ("title", "scene", "set", "case", "product", "run", "table", "figures")
 MAX_NAME = 64        # longest folder name before it is shortened and ends in a hash

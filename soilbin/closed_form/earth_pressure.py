@@ -35,3 +35,15 @@ def lancellotta_passive(phi, delta):
     root = math.sqrt(max(math.sin(p) ** 2 - math.sin(d) ** 2, 0.0))
     return (math.cos(d) / (1.0 - math.sin(p)) * (math.cos(d) + root)
             * math.exp(two_theta * math.tan(p)))
+
+
+def coulomb_passive(phi, delta):
+    """Coulomb's plane-wedge Kp (normal component) of a vertical wall with friction δ under a
+    horizontal surface, φ and δ in degrees: the thrust Kp_C γH²/2 acts at δ to the normal,
+    Kp_C = cos²φ / (cos δ (1 − √(sin(φ + δ) sin φ / cos δ))²) (Müller-Breslau's closed form
+    for a vertical back and level ground), so Kp = Kp_C cos δ. A rigid wedge is a mechanism:
+    an upper bound, unsafe for δ > φ/3, where the failure surface curves (Caquot–Kérisel's
+    log spiral). δ = 0 gives Rankine."""
+    p, d = math.radians(phi), math.radians(delta)
+    root = math.sqrt(math.sin(p + d) * math.sin(p) / math.cos(d))
+    return math.cos(p) ** 2 / (1.0 - root) ** 2

@@ -69,6 +69,8 @@ class SoilProblem:
             if self.drive.external is not None:
                 residual = residual - self.drive.external
             self.drive.measure_with(internal)
+        if self.tool is not None:
+            self.tool.measure_with(internal)
         jacobian = self.kinematics.jacobian(residual, self.points,
                                             ufl.TrialFunction(self.disc.space), v)
         tool = self.tool

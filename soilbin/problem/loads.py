@@ -31,17 +31,20 @@ def facets(tagged, name):
     return tagged.facet_tags.find(tagged.boundaries[name])
 
 
-def probe(disc, tagged, boundaries, vector, supports):
+def probe(disc, tagged, boundaries, vector, supports, only=None):
     """A function of the unknown's space equal to ``vector`` (dof components: the scene's
     axes) on the displacement dofs of the named boundaries and zero elsewhere: the virtual
     displacement that reads a resultant. At a dof the ``supports`` hold it is scaled by the
-    boundaries' share of the dof's tributary area (module doc)."""
+    boundaries' share of the dof's tributary area (module doc). ``only``: the dofs (the
+    unknown's numbering) it is limited to, if given; collective."""
     V, tdim = disc.displacement_space, disc.mesh.topology.dim
     comm = disc.mesh.comm
     field = fem.Function(disc.space)
     for i in np.flatnonzero(vector):
         dofs = np.concatenate([fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
                                for name in boundaries])
+        if only is not None:
+            dofs = np.intersect1d(dofs, only)
         held = np.isin(dofs, supports.held)
         share = 1.0
         if comm.allreduce(bool(held.any()), op=MPI.LOR):   # collective: every rank assembles

@@ -9,6 +9,15 @@ integrated with the nodal (lumped) rule, so the law and its slip history
 live exactly at the contact points and a node on an edge of the tool
 touches both faces. Residual += A t(u − U), Jacobian += A dt/djump on the
 node's own 3x3 block (rows and columns of Dirichlet dofs left alone).
+
+A support may hold a node of a face too. Along the face (the block on a
+plate, held at its end, that the plate slides under) the law still acts:
+the tool slides past the held node. But where a support holds the soil in a
+component along both the travel and the face's normal (the toe of a wall
+pushed over soil held below it), the tool would press the held node by its
+whole travel: such a node is the support's, not a contact point, and its
+held dofs there (``support_dofs``) are where the tool's force reads the
+support's reaction instead (:class:`~soilbin.problem.tool.RigidTool`).
 """
 import numpy as np
 import ufl
@@ -22,11 +31,13 @@ from ..tensors import from_mandel
 
 
 class RigidToolContact:
-    def __init__(self, disc, w, facet_tags, face_tags, law, bcs, incremental, initial_stress=None):
+    def __init__(self, disc, w, facet_tags, face_tags, law, bcs, travel, incremental,
+                 initial_stress=None):
         """``face_tags``: facet tags of the tool faces; ``w``: the unknown, which
         holds the total displacement or, if ``incremental`` (updated Lagrangian),
-        the increment since the last commit; ``initial_stress(x)`` (n, 6): the
-        soil's in-situ stress, which the tool carries from the start."""
+        the increment since the last commit; ``travel``: the unit vector the tool
+        moves along; ``initial_stress(x)`` (n, 6): the soil's in-situ stress, which
+        the tool carries from the start."""
         mesh = disc.mesh
         V = disc.displacement_space
         scalar_space = fem.FunctionSpace(mesh, V.ufl_element().sub_elements()[0])
@@ -56,15 +67,22 @@ class RigidToolContact:
             direction.value[:] = np.eye(3)[i]
             return self._nodal(normal_form)
 
-        nodes, areas, normals = [], [], []
+        nodes, areas, normals, pressed_dofs = [], [], [], []
         for k in range(len(face_tags)):
             face.value[:] = np.eye(len(face_tags))[k]
             area = self._nodal(area_form)
-            n = np.stack([component(i) for i in range(3)], axis=1)
             on_face = np.flatnonzero(area[:owned] > 0.0)
-            nodes.append(on_face)
-            areas.append(area[on_face])
-            normals.append(n[on_face] / np.linalg.norm(n[on_face], axis=1)[:, None])
+            n = np.stack([component(i) for i in range(3)], axis=1)[on_face]
+            n /= np.linalg.norm(n, axis=1)[:, None]
+            # held components along the travel and the normal (beyond round-off): the support's
+            pressed = fixed[nodal_dofs[on_face]] & (np.abs(n * travel) > 1e-9)
+            pressed_dofs.append(nodal_dofs[on_face][pressed])
+            contact = ~pressed.any(axis=1)
+            nodes.append(on_face[contact])
+            areas.append(area[on_face][contact])
+            normals.append(n[contact])
+        #: Held dofs of the nodes that are the supports', not contact points (module doc).
+        self.support_dofs = np.unique(np.concatenate(pressed_dofs))
         self.scalar_space = scalar_space
         self.points_per_face = [len(n) for n in nodes]
         self.nodes = np.concatenate(nodes)               # local node index per contact point
@@ -125,6 +143,8 @@ class RigidToolContact:
             np.add.at(local.array, self.dofs.ravel(), forces.ravel())
 
     def add_jacobian(self, A):
+        if not len(self.dofs):   # no contact point on this rank (PETSc divides by the count)
+            return
         free = self._free[:, :, None] & self._free[:, None, :]
         blocks = self.areas[:, None, None] * self._tangent * free
         A.setValuesLocalRCV(self.dofs, self.dofs, blocks, addv=PETSc.InsertMode.ADD)

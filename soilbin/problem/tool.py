@@ -11,16 +11,25 @@ slip, separation), or, bonded, the same springs that never slip or open.
 
 :meth:`RigidTool.force` is the one measurement of the force between tool and
 soil: the sum of the interface tractions over every contact point (a point
-whose soil dof a support also holds included: the law acts on the tool there
-too), for the whole tool when the mesh holds part of it (``share``: half
-across a symmetry plane). The draft is its component along the travel, the
-lift the soil's upward force on the tool.
+whose soil dof a support also holds along the face included: the law acts on
+the tool there too), for the whole tool when the mesh holds part of it
+(``share``: half across a symmetry plane). Where a support holds a face's
+node against the travel (the toe of a wall over soil held below it: no
+contact point, ``rigid_tool_contact``), the support's reaction along the
+travel is counted instead, by the face's share of the node's tributary area
+(as for a driven boundary, :func:`~soilbin.problem.loads.probe`); such a
+tool is driven by displacement only. The draft is the force's component
+along the travel, the lift the soil's upward force on the tool.
 """
 import numpy as np
+import ufl
 from mpi4py import MPI
+from dolfinx import fem
 
+from ..errors import InputError
 from ..records.scene import Control
 from ..solver.stepping import Observation
+from .loads import assemble_total, probe
 from .probes import CellValue, cell_ahead
 from .rigid_tool_contact import RigidToolContact
 
@@ -43,10 +52,21 @@ class RigidTool:
         law = tool.interface.bonded() if tool.bonded else tool.interface
         self.interface = RigidToolContact(
             disc, w, tagged.facet_tags, [tagged.boundaries[f] for f in tool.faces], law,
-            supports.bcs, incremental=kinematics.incremental,
+            supports.bcs, direction, incremental=kinematics.incremental,
             initial_stress=geostatic and geostatic.stress)
         self.nodal_terms = [self.interface]
         self._comm = mesh.comm
+        self._reaction = None   # the supports' reaction along the travel (module doc)
+        self._reaction_probe = None
+        if self._comm.allreduce(len(self.interface.support_dofs), op=MPI.SUM):
+            if self.force_controlled:
+                raise InputError(
+                    f"loading.control = 'force': a support holds soil of tool.faces "
+                    f"{list(tool.faces)} against the tool's travel (as the support below a wall "
+                    "holds its toe); its reaction is in the tool's force but not in the draft's "
+                    "linearisation: use displacement control")
+            self._reaction_probe = probe(disc, tagged, tool.faces, loading.direction.vector,
+                                         supports, only=self.interface.support_dofs)
         # the contact points of each face: its nodes on the initial mesh (owned by this rank)
         ends = np.cumsum(self.interface.points_per_face)[:-1]
         self.face_points = dict(zip(tool.faces, np.split(self.interface.reference_points, ends)))
@@ -61,6 +81,13 @@ class RigidTool:
         front = self.face_points[max(lead, key=lead.get)]
         total = comm.allreduce(np.append(front.sum(axis=0), len(front)), op=MPI.SUM)
         return total[:3] / total[3]
+
+    def measure_with(self, internal):
+        """Read the supports' reaction where they hold the soil against the travel as the
+        internal force on those dofs."""
+        if self._reaction_probe is not None:
+            self._reaction = fem.form(ufl.replace(internal, {internal.arguments()[0]:
+                                                             self._reaction_probe}))
 
     def set_factor(self, factor):
         """The travel (displacement control) or the draft (force control) at this factor."""
@@ -104,7 +131,10 @@ class RigidTool:
     def force(self):
         """Resultant force (3,) the whole tool exerts on the soil, world axes (across a symmetry
         plane the y component is twice the half's); collective."""
-        return -self.interface.force() / self.share
+        force = -self.interface.force()
+        if self._reaction is not None:
+            force = force + assemble_total(self._reaction) * self.direction
+        return force / self.share
 
     def draft(self):
         """The force on the soil along the travel; collective."""

@@ -73,6 +73,8 @@ class Headline(enum.Enum):
     step blows up (or the first step at which the pressure falls). It does not depend on how far Newton gets past that point
     (in large deformation the geometry keeps the curve rising slowly and the
     last converged load does), and is none if no step gets there.
+    The pressures are a loaded boundary's; ``final_lift`` is a tool's (the soil's
+    upward force on it: a rough wall's friction).
     """
     FINAL_DISPLACEMENT = "final_displacement"
     FINAL_PRESSURE = "final_pressure"
@@ -80,6 +82,12 @@ class Headline(enum.Enum):
     COLLAPSE_PRESSURE = "collapse_pressure"
     FINAL_FORCE = "final_force"
     PEAK_FORCE = "peak_force"
+    FINAL_LIFT = "final_lift"
+
+
+#: Headline results read off a loaded boundary's pressure, and off a tool's lift.
+BOUNDARY_HEADLINES = (Headline.FINAL_PRESSURE, Headline.PEAK_PRESSURE, Headline.COLLAPSE_PRESSURE)
+TOOL_HEADLINES = (Headline.FINAL_LIFT,)
 
 
 #: Settlement per unit pressure, relative to the elastic one, that marks the collapse.
@@ -141,9 +149,10 @@ TOOL = "tool"   # the loading boundary name that means the rigid tool
 
 @dataclasses.dataclass(frozen=True)
 class Tool(Params):
-    """A rigid tool in a cavity of the soil mesh, displaced as a whole (loading.boundary = 'tool')."""
-    faces: tuple[str, ...] = param(doc="soil boundaries against the tool (the cavity faces); "
-                                       "default: the mesh builder's contact groups")
+    """A rigid tool against faces of the soil mesh (a cavity's, or part of its outer boundary
+    such as a wall's), displaced as a whole (loading.boundary = 'tool')."""
+    faces: tuple[str, ...] = param(doc="soil boundaries against the tool (a cavity's faces, or "
+                                       "a wall); default: the mesh builder's contact groups")
     bonded: bool = param(False, doc="true: the interface's springs never slip or open (no "
                                     "interface behaviour)")
     interface: MohrCoulombInterface = param(None, doc="Mohr-Coulomb interface law (its k_n, k_s "
@@ -365,9 +374,13 @@ def _parse(raw, path):
     analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
     _check_held(supports, loading, analysis, tool)
     headline = {}
+    unread, driven = ((BOUNDARY_HEADLINES, "a tool") if loading.boundary == TOOL
+                      else (TOOL_HEADLINES, "a loaded boundary"))
     for key, value in _optional(raw, "headline", dict).items():
         spec = value if isinstance(value, dict) else {"of": value}
         headline[key] = from_table(HeadlineResult, spec, f"headline.{key}")
+        if headline[key].of in unread:
+            raise InputError(f"headline.{key}: {headline[key].of.value} is not read off {driven}")
 
     if tool is not None and any(analysis.frame_rotation):
         raise InputError("analysis.frame_rotation: a scene with a tool cannot be rotated (the "
@@ -389,7 +402,7 @@ def _parse(raw, path):
 
 def _check_held(supports, loading, analysis, tool):
     """Every displacement component held somewhere (a support, plane strain, a prescribed
-    displacement, or the tool in its cavity); else the body moves as a rigid body, the
+    displacement, or the tool against the soil); else the body moves as a rigid body, the
     stiffness matrix is singular and the solver would return noise as a result."""
     if tool is not None:
         return
