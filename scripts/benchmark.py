@@ -65,9 +65,7 @@ def cases(quick):
                [f"analysis.large_deformation={large}"])
     yield "tine, refine=2", TINE, ["mesh.refine=2"]
     yield "tine, refine=3, AMG", TINE, ["mesh.refine=3", "solver.linear=amg"]
-    # the large mesh (1.0e6 displacement dofs): one step of 1/8 of the travel
-    yield ("tine, refine=5, AMG, one step", TINE,
-           ["mesh.refine=5", "solver.linear=amg", "loading.steps=1", "loading.magnitude=0.0125"])
+    # the 10^6-unknown tine: scripts/large_tine.py (per Newton iteration; its step does not converge)
 
 
 def peak_pressure(records):
