@@ -1,0 +1,93 @@
+"""The tine on a large mesh: time, Krylov iterations and memory of every Newton iteration.
+
+    OMP_NUM_THREADS=1 python scripts/large_tine.py --set mesh.refine=4 [--set ...]
+    OMP_NUM_THREADS=1 mpirun -n 2 python scripts/large_tine.py --set mesh.refine=4
+
+One load step of the default tine scene (1/8 of its travel, the step out of the
+K0 state, the hardest of the run) with GMRES + GAMG (``solver.linear = "amg"``)
+unless overridden. Prints a line per Newton iteration (CPU seconds of the
+iteration on rank 0, its Krylov iterations, the residual, the peak resident
+memory summed over the ranks) and writes them with the set-up's to
+``--out`` (JSON), for the README's large-mesh row.
+"""
+import argparse
+import json
+import resource
+import sys
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from soilbin.meshes import BUILDERS  # noqa: E402
+from soilbin.problem import SoilProblem  # noqa: E402
+from soilbin.records.scene import load_scene  # noqa: E402
+from soilbin.solver.newton import NewtonSolver  # noqa: E402
+
+DEFAULTS = ["solver.linear=amg", "loading.steps=1", "loading.magnitude=0.0125"]
+
+
+def memory_mb(comm):
+    """Peak resident set of all ranks together [MB]."""
+    return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--out", type=Path, default=ROOT / "runs" / "large-tine" / "result.json")
+    args = parser.parse_args()
+    comm = MPI.COMM_WORLD
+    say = print if comm.rank == 0 else (lambda *a, **k: None)
+
+    start = time.process_time()
+    scene = load_scene(ROOT / "scenes" / "tine-2in-90deg.toml", DEFAULTS + args.set)
+    problem = SoilProblem(scene, BUILDERS[scene.mesh_builder].build(scene.mesh, comm))
+    setup = dict(setup_s=time.process_time() - start, memory_MB=memory_mb(comm),
+                 dofs=problem.n_dofs, cells=problem.disc.mesh.topology.index_map(3).size_global,
+                 ranks=comm.size, solver=problem.newton.linear.description, overrides=args.set)
+    say(json.dumps(setup), flush=True)
+
+    newton, iterations = problem.newton, []
+    stats = newton.linear.stats
+    step, residual = NewtonSolver._newton_step, NewtonSolver.residual
+    clock = {"t": time.process_time(), "krylov": 0}
+
+    def logged_step(self):
+        """The Newton correction; logs the iteration that ends with it."""
+        da = step(self)
+        now = time.process_time()
+        row = dict(cpu_s=now - clock["t"], krylov=stats["krylov_iterations"] - clock["krylov"],
+                   memory_MB=memory_mb(comm))
+        clock.update(t=now, krylov=stats["krylov_iterations"])
+        iterations.append(row)
+        say(f"Newton {len(iterations):3d}  {row['cpu_s']:8.1f} CPU s  Krylov {row['krylov']:4d}  "
+            f"memory {row['memory_MB']:8.0f} MB", flush=True)
+        return da
+
+    def logged_residual(self, b):
+        norm = residual(self, b)
+        say(f"    |R| = {norm:.4e}", flush=True)
+        return norm
+
+    NewtonSolver._newton_step, NewtonSolver.residual = logged_step, logged_residual
+    problem.set_load_factor(1.0)
+    try:
+        result = problem.solve()
+        outcome = dict(converged=True, newton=result.iterations)
+    except Exception as err:   # report what was measured before the failure
+        outcome = dict(converged=False, message=str(err))
+    summary = dict(**setup, **outcome, iterations=iterations,
+                   draft=problem.observe().force if outcome["converged"] else None,
+                   newton_stats=dict(newton.stats), linear_stats=dict(stats))
+    if comm.rank == 0:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(summary, indent=1))
+    say(json.dumps({k: v for k, v in summary.items() if k != "iterations"}))
+
+
+if __name__ == "__main__":
+    main()
