@@ -533,42 +533,60 @@ class CapModel(IsotropicElasticity):
 def cap_samples(table, cohesive):
     """Conformance samples of a cap model from its parameter tables with X0 = 20:
     ``table`` with the apex at I1 = 0 (A = C) and no cut-off, ``cohesive`` with
-    the apex in tension and a cut-off below it; each with both hardenings."""
+    the apex in tension and a cut-off below it; each with both hardenings, and
+    in the modes that non-associated flow changes also with the dilatancy
+    factors 0.5 and 0 (the cap corner only with 0.5: with 0 its normal cone is
+    the vertical above it)."""
     n, I = SHEAR, IDENTITY
-    # (mode, compression-positive p_n, deps, yield_state)
-    plain = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
-             ("failure", 3.0, 2e-3 * n, FAILURE),
-             ("apex", 0.5, 1e-2 * I + 1e-4 * n, APEX),
-             ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
-             ("cap corner", 3.85, 1e-2 * n, CAP_CORNER)]       # I1_n = 11.55 just below L
-    cut = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
-           ("failure", 1.0, 2e-3 * n, FAILURE),
-           ("cut-off", 0.0, 3e-4 * I + 1e-5 * n, CUTOFF),
-           ("corner", 0.0, 3e-3 * I + 3e-3 * n, APEX),           # failure surface / cut-off
-           ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
-           ("cap corner", 2.8, 1e-2 * n, CAP_CORNER)]
-    return [Sample(mode, {**t, "hardening": h.value}, -p * I, deps, code)
+    every, associated, reduced = (1.0, 0.5, 0.0), (1.0,), (1.0, 0.5)
+    # (mode, compression-positive p_n, deps, yield_state, dilatancy factors)
+    plain = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC, associated),
+             ("failure", 3.0, 2e-3 * n, FAILURE, every),
+             ("apex", 0.5, 1e-2 * I + 1e-4 * n, APEX, every),
+             # p_lo - p_tr = 2.75 J_tr: associated flow returns to the failure surface
+             ("apex, beyond the failure potential", 0.5, 8.5e-5 * I + 1.1e-4 * n, APEX,
+              (0.5, 0.0)),
+             ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP, associated),
+             ("cap corner", 3.85, 1e-2 * n, CAP_CORNER, reduced)]   # I1_n = 11.55 just below L
+    cut = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC, associated),
+           ("failure", 1.0, 2e-3 * n, FAILURE, every),
+           ("cut-off", 0.0, 3e-4 * I + 1e-5 * n, CUTOFF, every),
+           ("corner", 0.0, 3e-3 * I + 3e-3 * n, APEX, every),        # failure surface / cut-off
+           ("corner, beyond the failure potential", 0.0, 2.8e-4 * I + 1.2e-3 * n, APEX,
+            (0.5, 0.0)),
+           ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP, associated),
+           ("cap corner", 2.8, 1e-2 * n, CAP_CORNER, reduced)]
+    return [Sample(*dilated(mode, {**t, "hardening": h.value}, eta), -p * I, deps, code)
             for h in CapHardening for t, cases in ((table, plain), (cohesive, cut))
-            for mode, p, deps, code in cases]
+            for mode, p, deps, code, etas in cases for eta in etas]
+
+
+def dilated(mode, table, dilatancy):
+    """(mode, table) of a sample with the dilatancy factor ``dilatancy`` (named in
+    both unless associated)."""
+    if dilatancy == 1.0:
+        return mode, table
+    return f"{mode}, dilatancy {dilatancy:g}", {**table, "dilatancy": dilatancy}
 
 
 def retreating_samples(cls):
     """Conformance samples of the retreating cap at the sand's scale (ksi), from
     the cap end X_n (the centre L = max(kappa(X_n), 0)): the return modes the
-    retreat adds."""
+    retreat adds, and where the failure surface dilates, those with half its
+    dilatancy."""
     table = {**MCCORMICK_RANCH, "X0": 1.0, "hardening": CapHardening.VOLUMETRIC.value}
     sand = cls(**{**table, "hardening": CapHardening.VOLUMETRIC})
     n, I = SHEAR, IDENTITY
-    # (mode, compression-positive p_n, deps, X_n, yield_state)
-    cases = [("failure, the cap retreating", 0.1, 2e-5 * I + 2e-3 * n, 1.0, FAILURE),
-             ("moving cap corner", 0.01, 1e-4 * I + 3e-3 * n, 0.2, CAP_CORNER),
-             ("cap corner held at L = 0", 0.01, 5e-4 * I + 1e-2 * n, 0.2, CAP_CORNER),
-             ("shrunken cap, kappa < 0", 0.01, -3e-4 * I + 1e-4 * n, 0.1, CAP),
-             ("apex, lifted", 0.01, 1e-3 * I, 0.1, APEX)]
-    return [Sample(mode, table, -p * I, deps, code,
+    # (mode, compression-positive p_n, deps, X_n, yield_state, dilatancy factors)
+    cases = [("failure, the cap retreating", 0.1, 2e-5 * I + 2e-3 * n, 1.0, FAILURE, (1.0, 0.5)),
+             ("moving cap corner", 0.01, 1e-4 * I + 3e-3 * n, 0.2, CAP_CORNER, (1.0, 0.5)),
+             ("cap corner held at L = 0", 0.01, 5e-4 * I + 1e-2 * n, 0.2, CAP_CORNER, (1.0,)),
+             ("shrunken cap, kappa < 0", 0.01, -3e-4 * I + 1e-4 * n, 0.1, CAP, (1.0,)),
+             ("apex, lifted", 0.01, 1e-3 * I, 0.1, APEX, (1.0,))]
+    return [Sample(*dilated(mode, table, eta), -p * I, deps, code,
                    {"cap_L": max(float(sand.kappa(np.array([X]))[0]), sand.L_min), "cap_X": X},
                    fd_step=1e-9)
-            for mode, p, deps, X, code in cases]
+            for mode, p, deps, X, code, etas in cases for eta in etas]
 
 
 @dataclasses.dataclass(frozen=True)
