@@ -37,16 +37,17 @@ volume change (dilation) over its shear strain sqrt2 |dev deps^p| is
 3 eta_d F'(I1), a fraction eta_d of the associated flow's at every
 confinement (on the modified cap's high-pressure line Drucker–Prager's
 3 alpha_psi with alpha_psi = eta_d B). The cap stays associated (B.10).
-Where eta_d < 1 changes the return (the regions below): the failure return
-goes along the potential's direction (9 K eta_d F', G) in the trial (I1, J)
-plane instead of the surface's normal; the normal cones of the corners
-become the cones spanned by the return directions of the two surfaces, so
-the apex (or its corner with the cut-off) takes the trials beyond the
-failure potential's direction there, and, as for Drucker–Prager (.cone),
-the apex acts as the corner with a cut-off p <= p_lo that takes the rest of
-the volumetric strain (with eta_d = 0 every trial with p_tr < p_lo returns
-to it: isochoric flow cannot bring it back); the cap corner's cone, between
-the cap's vertical (0, G) and (9 K eta_d F'(L), G), narrows to the vertical
+Where eta_d < 1 changes the return (the regions below): the trial lies
+from the returned stress along C:m, in the (I1, J) plane the direction
+(-9 K eta_d F', G) of the potential instead of the surface's normal
+(-9 K F', G); the normal cones of the corners become the cones spanned by
+the return directions of the two surfaces there. The apex (or its corner
+with the cut-off) takes the trials beyond the failure potential's direction
+from it, and, as for Drucker–Prager (.cone), the apex acts as the corner with
+a cut-off p <= p_lo that takes the rest of the volumetric strain, direction
+(-9 K, 0) (with eta_d = 0 every trial with p_tr < p_lo returns to it:
+isochoric flow cannot bring it back). The cap corner's cone, between the
+cap's vertical (0, G) and (-9 K eta_d F'(L), G), narrows to the vertical
 above the corner for eta_d = 0. The failure return's tangent is unsymmetric
 (dp/dJ_tr = 3 eta_d F' / (G g') against dJ/de_v = 3 F' / g'). The hardening:
 with ``volumetric`` the cap retreats by the failure surface's (smaller)
@@ -106,7 +107,7 @@ is fixed; the cap's normal at its corner (L, F(L)) is purely deviatoric; the
 failure surface's "normal" is the return direction along its potential):
 
     cap         I1_tr > L and f_C > 0            local Newton (p, J, dgamma, kappa)
-    cap corner  I1_tr <= L, beyond the failure normal at L      (L, F(L)), L moving
+    cap corner  I1_tr <= L, beyond the failure return at L      (L, F(L)), L moving
                 back with the dilation (a bracketed root; fixed with cap_compaction)
     failure     between the corners' normal cones              scalar root in p,
                 then the cap retreats (and where it passes the stress: cap corner)
