@@ -45,7 +45,7 @@ the return directions of the two surfaces there. The apex (or its corner
 with the cut-off) takes the trials beyond the failure potential's direction
 from it, and, as for Drucker–Prager (.cone), the apex acts as the corner with
 a cut-off p <= p_lo that takes the rest of the volumetric strain, direction
-(-9 K, 0) (with eta_d = 0 every trial with p_tr < p_lo returns to it:
+(-1, 0) (with eta_d = 0 every trial with p_tr < p_lo returns to it:
 isochoric flow cannot bring it back). The cap corner's cone, between the
 cap's vertical (0, G) and (-9 K eta_d F'(L), G), narrows to the vertical
 above the corner for eta_d = 0. The failure return's tangent is unsymmetric
