@@ -553,6 +553,7 @@ def cap_samples(table, cohesive):
            ("failure", 1.0, 2e-3 * n, FAILURE, every),
            ("cut-off", 0.0, 3e-4 * I + 1e-5 * n, CUTOFF, every),
            ("corner", 0.0, 3e-3 * I + 3e-3 * n, APEX, every),        # failure surface / cut-off
+           # between the wedges of half and of full dilatancy for both cohesive tables
            ("corner, beyond the failure potential", 0.0, 2.8e-4 * I + 1.2e-3 * n, APEX,
             (0.5, 0.0)),
            ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP, associated),
