@@ -5,9 +5,11 @@ case's summary.json and curve.csv and prints, or with --readme writes between
 the README's tine-models and tine-dilatancy markers, per case: the load steps
 (cuts), the Newton iterations (per converged step, the first step's, and
 those of attempts that were cut), the draft at 0.1, 0.25 and 0.5 in of travel
-and the wall time. Draws tine-models.png (the three VII.5 soil models,
-Drucker–Prager as in the scene: c = 0, psi = phi) and the study's own
-tine-dilatancy.png in the study folder; --figures DIR copies both there.
+and the wall time: the three VII.5 soil models as the scene has them
+(Drucker–Prager: c = 0, psi = phi) in tine-models, the Drucker–Prager cases
+and the caps with less dilatancy in tine-dilatancy. Draws tine-models.png
+and the study's own tine-dilatancy.png in the study folder; --figures DIR
+copies both there.
 Loads in lb, travel in in.
 """
 import shutil
@@ -24,6 +26,7 @@ SOILS = {"modified_cap": "modified cap, A = C = 5.6",
          "dimaggio_sandler": "DiMaggio–Sandler, A = C = 5.6",
          "drucker_prager": "Drucker–Prager, c = 0, ψ = φ"}
 DP = "materials.drucker_prager."
+CAP_DILATANCY = {soil: f"materials.{soil}.dilatancy" for soil in SOILS if soil != "drucker_prager"}
 
 
 def outcomes(study, folder):
@@ -59,8 +62,10 @@ HEADER = ("| {} | steps | Newton iterations (per step) | in cut attempts | draft
 def soil_model(outcome):
     """Whether the case is one of the soil models as the scene has them."""
     values = outcome.case.values
-    return (values["regions.soil"] != "drucker_prager"
-            or (values[DP + "c"], values[DP + "psi"]) == (0.0, 33.0))
+    soil = values["regions.soil"]
+    if soil == "drucker_prager":
+        return (values[DP + "c"], values[DP + "psi"]) == (0.0, 33.0)
+    return CAP_DILATANCY[soil] not in values
 
 
 def models_table(results):
@@ -72,13 +77,18 @@ def models_table(results):
 
 
 def dilatancy_table(results):
-    lines = [HEADER.format("Drucker–Prager")]
+    lines = [HEADER.format("model")]
     for outcome, rows in results:
         values = outcome.case.values
-        if values["regions.soil"] == "drucker_prager":
+        soil = values["regions.soil"]
+        if soil == "drucker_prager":
             psi = values[DP + "psi"]
             dilation = "ψ = φ = 33°" if psi == 33.0 else f"ψ = {psi:g}°"
-            lines.append(row(f"c = {values[DP + 'c']:g} psi, {dilation}", outcome, rows))
+            lines.append(row(f"Drucker–Prager, c = {values[DP + 'c']:g} psi, {dilation}",
+                             outcome, rows))
+        elif not soil_model(outcome):
+            eta = values[CAP_DILATANCY[soil]]
+            lines.append(row(f"{SOILS[soil]}, η_d = {eta:g}", outcome, rows))
     return "\n".join(lines)
 
 

@@ -1,6 +1,7 @@
 """Cap models: DiMaggio & Sandler (1971) and the dissertation's modified cap
-(app. B.4, eqs. B.9-B.12; Sture et al.'s artificial soil), associated,
-with a tension cut-off. Return mapping after Simo, Ju, Pister & Taylor (1988)
+(app. B.4, eqs. B.9-B.12; Sture et al.'s artificial soil), associated by
+default, optionally with less dilatancy on the failure surface, and with a
+tension cut-off. Return mapping after Simo, Ju, Pister & Taylor (1988)
 and Hofstetter, Simo & Taylor (1993): the trial state's region in the
 (I1, sqrt(J2)) plane picks the active surface or corner, and only the cap
 needs a local Newton (the failure surface does not harden: a bracketed scalar
@@ -19,7 +20,42 @@ J = sqrt(J2). The two models differ only in the failure function F:
                      the ``tension_cutoff`` of the cone models;
     hardening (B.11) eps_v^p = W (1 - exp(-D X)),
 
-with associated flow on every surface.
+with associated flow on the cap and the cut-off, and on the failure surface
+the flow potential
+
+    g_F = J - eta_d F(I1),   0 <= eta_d <= 1   (``dilatancy``),
+
+eta_d = 1 (the default) associated, the dissertation's; eta_d = 0 isochoric.
+
+Dilatancy (``dilatancy``). The failure surface is curved: its slope F'(I1),
+and with it the dilatancy of associated flow, falls with the confinement (for
+DiMaggio–Sandler to zero on the von Mises plateau). A dilation angle, a
+fixed slope of the potential, would dilate more than associated flow where
+the surface flattens; the factor eta_d instead scales the surface's own
+slope: the plastic strain on the failure surface is dgamma dg_F/dsigma, its
+volume change (dilation) over its shear strain sqrt2 |dev deps^p| is
+3 eta_d F'(I1), a fraction eta_d of the associated flow's at every
+confinement (on the modified cap's high-pressure line Drucker–Prager's
+3 alpha_psi with alpha_psi = eta_d B). The cap stays associated (B.10).
+Where eta_d < 1 changes the return (the regions below): the trial lies
+from the returned stress along C:m, in the (I1, J) plane the direction
+(-9 K eta_d F', G) of the potential instead of the surface's normal
+(-9 K F', G); the normal cones of the corners become the cones spanned by
+the return directions of the two surfaces there. The apex (or its corner
+with the cut-off) takes the trials beyond the failure potential's direction
+from it, and, as for Drucker–Prager (.cone), the apex acts as the corner with
+a cut-off p <= p_lo that takes the rest of the volumetric strain, direction
+(-1, 0) (with eta_d = 0 every trial with p_tr < p_lo returns to it:
+isochoric flow cannot bring it back). The cap corner's cone, between the
+cap's vertical (0, G) and (-9 K eta_d F'(L), G), narrows to the vertical
+above the corner for eta_d = 0. The failure return's tangent is unsymmetric
+(dp/dJ_tr = 3 eta_d F' / (G g') against dJ/de_v = 3 F' / g'). The hardening:
+with ``volumetric`` the cap retreats by the failure surface's (smaller)
+dilation, not at all for eta_d = 0; with ``cap_compaction`` the cap does not
+feel the failure surface, and less dilatancy only changes the stress path on
+it (with eta_d = 0 the mean stress stays the trial's, so shear alone no
+longer drives a point up the surface into the cap corner, the vertex without
+bulk stiffness) and the plastic volume (history ``eps_p_vol``).
 
 How the OCR'd equations were read. The dissertation writes J1 tension
 positive in the exponentials: B.9 "fF = sqrt(J2D) - A + C e^{beta J1}" is
@@ -67,10 +103,11 @@ stress: app. C, "specifying the position of the initial cap is at that
 state").
 
 Regions of the trial state (I1_tr, J_tr), with L = L_n (the failure surface
-is fixed; the cap's normal at its corner (L, F(L)) is purely deviatoric):
+is fixed; the cap's normal at its corner (L, F(L)) is purely deviatoric; the
+failure surface's "normal" is the return direction along its potential):
 
     cap         I1_tr > L and f_C > 0            local Newton (p, J, dgamma, kappa)
-    cap corner  I1_tr <= L, beyond the failure normal at L      (L, F(L)), L moving
+    cap corner  I1_tr <= L, beyond the failure return at L      (L, F(L)), L moving
                 back with the dilation (a bracketed root; fixed with cap_compaction)
     failure     between the corners' normal cones              scalar root in p,
                 then the cap retreats (and where it passes the stress: cap corner)
@@ -134,6 +171,12 @@ class CapModel(IsotropicElasticity):
                       doc="initial cap position X (compression-positive I1); moved out to pass "
                           "through the initial stress where that lies beyond it")
     tension_cutoff: float = tension_cutoff_param()
+    dilatancy: float = param(
+        1.0, lo=0.0, hi=1.0,
+        doc="dilatancy factor eta_d of the failure surface's flow potential "
+            "g = sqrt(J2) - eta_d F(I1): the plastic dilation a fraction eta_d of the "
+            "associated flow's; 1 (the default) associated, 0 isochoric; the cap stays "
+            "associated")
     hardening: CapHardening = param(
         CapHardening.CAP_COMPACTION,
         doc="what moves the cap: cap_compaction (only the cap's own compaction: the cap never "
@@ -243,7 +286,7 @@ class CapModel(IsotropicElasticity):
         return state
 
     def integrate(self, deps, state, guess=None):
-        G, K, R = self.G, self.K, self.R
+        G, R = self.G, self.R
         bulk = self.bulk
         trial = Trial.split(deps, state["stress"], G)
         p_n, de_v, J_tr = trial.p_n, trial.de_v, trial.J_tr
@@ -267,13 +310,13 @@ class CapModel(IsotropicElasticity):
         f_cap = np.hypot((3.0 * p_tr - L_n) / R, J_tr) - height
         cap = cap_side & (f_cap > tol)
         low = ~cap_side & ((f_fail > tol) | (p_lo - p_tr > tol))
-        # Wedges of the fixed corners: g(p) = E(p) - de_v - 3 F'(3p) (J_tr - F(3p)) / G is
-        # the failure surface's return equation; g >= 0 at p_lo, g <= 0 at L/3 put the
-        # trial in the normal cone of the corner.
-        g_lo = (p_lo - p_n) / K - de_v - 3.0 * dF_lo * (J_tr - J_lo) / G
+        # Wedges of the fixed corners: the failure return's volumetric split g(p)
+        # (_failure_split) >= 0 at p_lo, <= 0 at L/3 puts the trial in the normal cone
+        # of the corner, spanned by the return directions of its surfaces.
+        g_lo = self._failure_split(bulk, p_lo, J_lo, dF_lo, p_n, de_v, J_tr)
         corner = low & (J_tr >= J_lo) & (g_lo >= 0.0)
         cut = low & ~corner & (J_tr < J_lo) & (p_tr < p_lo)
-        g_cap = (L_n / 3.0 - p_n) / K - de_v - 3.0 * dF_L * (J_tr - F_L) / G
+        g_cap = self._failure_split(bulk, L_n / 3.0, F_L, dF_L, p_n, de_v, J_tr)
         cap_corner = low & ~corner & ~cut & (g_cap <= 0.0)
         fail = low & ~corner & ~cut & ~cap_corner
 
@@ -321,37 +364,51 @@ class CapModel(IsotropicElasticity):
         (``last``: yield states) therefore gets the tangent of that stretch, the failure
         surface's (:meth:`_failure_return`'s sensitivities at the vertex); a point that
         stays at its vertex has the vertex's own."""
-        G = self.G
         p = np.where(apex, self.lowest[0], L_n / 3.0)
         F, dF, d2F = self.failure(3.0 * p)
         crossed = (apex & (last == CAP_CORNER)) | (cap_corner & (last == APEX))
         with np.errstate(all="ignore"):
-            dg = bulk.compliance(p) + 9.0 * (dF**2 - d2F * (trial.J_tr - F)) / G
-        p_e = np.where(crossed, 1.0 / dg, 0.0)
-        p_J = np.where(crossed, 3.0 * dF / (G * dg), 0.0)
+            sens = self._failure_sensitivities(bulk, p, trial.J_tr, F, dF, d2F)
+        sens = [np.where(crossed, s, 0.0) for s in sens]
         for at, code in ((apex, APEX), (cap_corner, CAP_CORNER)):
             k = np.flatnonzero(at)
-            response.solved(k, p[k], np.maximum(F[k], 0.0), p_e[k], p_J[k], 3.0 * dF[k] * p_e[k],
-                            3.0 * dF[k] * p_J[k], code)
+            response.solved(k, p[k], np.maximum(F[k], 0.0), *(s[k] for s in sens), code)
+
+    def _failure_split(self, bulk, p, F, dF, p_n, de_v, J_tr):
+        """g(p) = E(p; p_n) - de_v - 3 eta_d F' (J_tr - F) / G with (F, F') at I1 = 3p:
+        the volumetric strain left by a return onto the failure surface at p along
+        its potential, dgamma = (J_tr - F) / G (module doc); g = 0 at the return."""
+        return bulk.strain(p, p_n) - de_v - 3.0 * self.dilatancy * dF * (J_tr - F) / self.G
+
+    def _failure_slope(self, bulk, p, J_tr, F, dF, d2F):
+        """dg/dp of :meth:`_failure_split`: 1/K(p) + 9 eta_d (F'^2 - F'' (J_tr - F)) / G,
+        at least 1/K(p) where J_tr >= F (F'' <= 0)."""
+        return bulk.compliance(p) + 9.0 * self.dilatancy * (dF**2 - d2F * (J_tr - F)) / self.G
+
+    def _failure_sensitivities(self, bulk, p, J_tr, F, dF, d2F):
+        """(p_e, p_J, J_e, J_J) of the failure return at p (implicit-function theorem
+        on g(p) = 0, J = F(3p)): p_e = 1/g', p_J = 3 eta_d F' / (G g'), J_e = 3 F' p_e,
+        J_J = 3 F' p_J; G p_J != J_e (unsymmetric tangent) unless eta_d = 1."""
+        dg = self._failure_slope(bulk, p, J_tr, F, dF, d2F)
+        p_e, p_J = 1.0 / dg, 3.0 * self.dilatancy * dF / (self.G * dg)
+        return p_e, p_J, 3.0 * dF * p_e, 3.0 * dF * p_J
 
     def _failure_return(self, trial, bulk, idx, p_lo, p_hi, response):
-        """Return onto the failure surface (perfectly plastic): dgamma = (J_tr - J)/G,
-        J = F(3p) and the volumetric split leave g(p) = 0 (see integrate) on [p_lo, p_hi]."""
-        G = self.G
+        """Return onto the failure surface (perfectly plastic) along its potential:
+        dgamma = (J_tr - J)/G, J = F(3p) and the volumetric split leave g(p) = 0
+        (:meth:`_failure_split`) on [p_lo, p_hi]."""
         p_n, de_v, J_tr = trial.p_n[idx], trial.de_v[idx], trial.J_tr[idx]
 
         def g(p, k):
             F, dF, d2F = self.failure(3.0 * p)
-            over = J_tr[k] - F
-            return (bulk.strain(p, p_n[k]) - de_v[k] - 3.0 * dF * over / G,
-                    bulk.compliance(p) + 9.0 * (dF**2 - d2F * over) / G)
+            return (self._failure_split(bulk, p, F, dF, p_n[k], de_v[k], J_tr[k]),
+                    self._failure_slope(bulk, p, J_tr[k], F, dF, d2F))
 
         p, converged = scalar_root(g, np.full(idx.size, p_lo), p_hi)
         check_converged(self, converged, len(trial.p_n))
-        F, dF, _ = self.failure(3.0 * p)
-        dg = g(p, np.arange(idx.size))[1]
-        p_e, p_J = 1.0 / dg, 3.0 * dF / (G * dg)
-        response.solved(idx, p, F, p_e, p_J, 3.0 * dF * p_e, 3.0 * dF * p_J, FAILURE)
+        F, dF, d2F = self.failure(3.0 * p)
+        response.solved(idx, p, F, *self._failure_sensitivities(bulk, p, J_tr, F, dF, d2F),
+                        FAILURE)
 
     def _retreat(self, trial, bulk, idx, ic, kappa_n, kappa, response):
         """The cap of the points ``idx`` (apex, cut-off, failure surface: dilating)
@@ -477,42 +534,61 @@ class CapModel(IsotropicElasticity):
 def cap_samples(table, cohesive):
     """Conformance samples of a cap model from its parameter tables with X0 = 20:
     ``table`` with the apex at I1 = 0 (A = C) and no cut-off, ``cohesive`` with
-    the apex in tension and a cut-off below it; each with both hardenings."""
+    the apex in tension and a cut-off below it; each with both hardenings, and
+    in the modes that non-associated flow changes also with the dilatancy
+    factors 0.5 and 0 (the cap corner only with 0.5: with 0 its normal cone is
+    the vertical above it)."""
     n, I = SHEAR, IDENTITY
-    # (mode, compression-positive p_n, deps, yield_state)
-    plain = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
-             ("failure", 3.0, 2e-3 * n, FAILURE),
-             ("apex", 0.5, 1e-2 * I + 1e-4 * n, APEX),
-             ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
-             ("cap corner", 3.85, 1e-2 * n, CAP_CORNER)]       # I1_n = 11.55 just below L
-    cut = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC),
-           ("failure", 1.0, 2e-3 * n, FAILURE),
-           ("cut-off", 0.0, 3e-4 * I + 1e-5 * n, CUTOFF),
-           ("corner", 0.0, 3e-3 * I + 3e-3 * n, APEX),           # failure surface / cut-off
-           ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP),
-           ("cap corner", 2.8, 1e-2 * n, CAP_CORNER)]
-    return [Sample(mode, {**t, "hardening": h.value}, -p * I, deps, code)
+    every, associated, reduced = (1.0, 0.5, 0.0), (1.0,), (1.0, 0.5)
+    # (mode, compression-positive p_n, deps, yield_state, dilatancy factors)
+    plain = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC, associated),
+             ("failure", 3.0, 2e-3 * n, FAILURE, every),
+             ("apex", 0.5, 1e-2 * I + 1e-4 * n, APEX, every),
+             # p_lo - p_tr = 2.75 J_tr: associated flow returns to the failure surface
+             ("apex, beyond the failure potential", 0.5, 8.5e-5 * I + 1.1e-4 * n, APEX,
+              (0.5, 0.0)),
+             ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP, associated),
+             ("cap corner", 3.85, 1e-2 * n, CAP_CORNER, reduced)]   # I1_n = 11.55 just below L
+    cut = [("elastic", 3.0, 1e-5 * n - 1e-5 * I, ELASTIC, associated),
+           ("failure", 1.0, 2e-3 * n, FAILURE, every),
+           ("cut-off", 0.0, 3e-4 * I + 1e-5 * n, CUTOFF, every),
+           ("corner", 0.0, 3e-3 * I + 3e-3 * n, APEX, every),        # failure surface / cut-off
+           # between the wedges of half and of full dilatancy for both cohesive tables
+           ("corner, beyond the failure potential", 0.0, 2.8e-4 * I + 1.2e-3 * n, APEX,
+            (0.5, 0.0)),
+           ("cap", 5.0, -3e-3 * I + 5e-4 * n, CAP, associated),
+           ("cap corner", 2.8, 1e-2 * n, CAP_CORNER, reduced)]
+    return [Sample(*dilated(mode, {**t, "hardening": h.value}, eta), -p * I, deps, code)
             for h in CapHardening for t, cases in ((table, plain), (cohesive, cut))
-            for mode, p, deps, code in cases]
+            for mode, p, deps, code, etas in cases for eta in etas]
+
+
+def dilated(mode, table, dilatancy):
+    """(mode, table) of a sample with the dilatancy factor ``dilatancy`` (named in
+    both unless associated)."""
+    if dilatancy == 1.0:
+        return mode, table
+    return f"{mode}, dilatancy {dilatancy:g}", {**table, "dilatancy": dilatancy}
 
 
 def retreating_samples(cls):
     """Conformance samples of the retreating cap at the sand's scale (ksi), from
     the cap end X_n (the centre L = max(kappa(X_n), 0)): the return modes the
-    retreat adds."""
+    retreat adds, and where the failure surface dilates, those with half its
+    dilatancy."""
     table = {**MCCORMICK_RANCH, "X0": 1.0, "hardening": CapHardening.VOLUMETRIC.value}
     sand = cls(**{**table, "hardening": CapHardening.VOLUMETRIC})
     n, I = SHEAR, IDENTITY
-    # (mode, compression-positive p_n, deps, X_n, yield_state)
-    cases = [("failure, the cap retreating", 0.1, 2e-5 * I + 2e-3 * n, 1.0, FAILURE),
-             ("moving cap corner", 0.01, 1e-4 * I + 3e-3 * n, 0.2, CAP_CORNER),
-             ("cap corner held at L = 0", 0.01, 5e-4 * I + 1e-2 * n, 0.2, CAP_CORNER),
-             ("shrunken cap, kappa < 0", 0.01, -3e-4 * I + 1e-4 * n, 0.1, CAP),
-             ("apex, lifted", 0.01, 1e-3 * I, 0.1, APEX)]
-    return [Sample(mode, table, -p * I, deps, code,
+    # (mode, compression-positive p_n, deps, X_n, yield_state, dilatancy factors)
+    cases = [("failure, the cap retreating", 0.1, 2e-5 * I + 2e-3 * n, 1.0, FAILURE, (1.0, 0.5)),
+             ("moving cap corner", 0.01, 1e-4 * I + 3e-3 * n, 0.2, CAP_CORNER, (1.0, 0.5)),
+             ("cap corner held at L = 0", 0.01, 5e-4 * I + 1e-2 * n, 0.2, CAP_CORNER, (1.0,)),
+             ("shrunken cap, kappa < 0", 0.01, -3e-4 * I + 1e-4 * n, 0.1, CAP, (1.0,)),
+             ("apex, lifted", 0.01, 1e-3 * I, 0.1, APEX, (1.0,))]
+    return [Sample(*dilated(mode, table, eta), -p * I, deps, code,
                    {"cap_L": max(float(sand.kappa(np.array([X]))[0]), sand.L_min), "cap_X": X},
                    fd_step=1e-9)
-            for mode, p, deps, X, code in cases]
+            for mode, p, deps, X, code, etas in cases for eta in etas]
 
 
 @dataclasses.dataclass(frozen=True)
