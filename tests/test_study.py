@@ -118,6 +118,14 @@ def test_an_earlier_run_stands_only_for_the_same_overrides_and_scene(tmp_path):
     assert earlier("complete", overrides=case.overrides[:-1]) is None        # another case's
     edited = case.scene.resolved().replace("E = 4500.0", "E = 4501.0")   # the base scene changed
     assert earlier("complete", resolved=edited) is None
+    # a run recorded before a key was added (here the line search, at its default) is
+    # still this case's; the same key at another value is not
+    before = case.scene.resolved().replace('line_search = "bt"\n', "")
+    assert before != case.scene.resolved()
+    assert earlier("complete", resolved=before) == "complete"
+    other = case.scene.resolved().replace('line_search = "bt"', 'line_search = "cp"')
+    assert earlier("complete", resolved=other) is None
+    assert earlier("complete", resolved="title = ") is None                 # no longer reads
     (folder / "summary.json").write_text('{"status": ')     # cut short
     assert _earlier(case, folder, retry_failed=False) is None
 

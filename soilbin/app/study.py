@@ -289,15 +289,28 @@ def load_study(path):
 
 def earlier_summary(case, folder):
     """The summary a run of exactly this case (its overrides, its resolved scene) left in
-    its folder, or None."""
+    its folder, or None. The recorded scene is the case's if it resolves to the same
+    scene when read now: a key added to soilbin since the run takes its default, which
+    keeps the behaviour the run had (a new key's default must)."""
     try:
         summary = json.loads((folder / "summary.json").read_text())
         resolved = (folder / "scene.toml").read_text()
     except (OSError, ValueError):
         return None
-    if summary.get("overrides") != list(case.overrides) or resolved != case.scene.resolved():
+    if summary.get("overrides") != list(case.overrides):
+        return None
+    if resolved != case.scene.resolved() and _read_now(folder / "scene.toml") != case.scene.resolved():
         return None
     return summary
+
+
+def _read_now(path):
+    """A run's recorded scene read by the present code (None if it no longer reads)."""
+    from ..records.scene import load_scene
+    try:
+        return load_scene(path).resolved()
+    except InputError:
+        return None
 
 
 def case_command(study, case, folder):
@@ -500,8 +513,8 @@ process (its output in CASE/run.log); CASE is named after the values the case
 sets, e.g. E=4500,magnitude=50. Every summary.json lists the case's
 "overrides". DIR (default runs/<study file name>) collects table.csv,
 table.md and the figures. Run it again to resume: a case whose folder holds
-the summary of a run of the same overrides and the same resolved scene is not
-run again (a failed one neither, unless --retry-failed); an interrupted one
+the summary of a run of the same overrides and the same resolved scene (read
+by the present soilbin: a key added since takes its default) is not run again (a failed one neither, unless --retry-failed); an interrupted one
 runs from the start. SIGINT/SIGTERM stop the running cases and
 write the table and figures of the finished ones.
 
