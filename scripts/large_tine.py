@@ -22,6 +22,7 @@ from mpi4py import MPI
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from soilbin.errors import ConvergenceError  # noqa: E402
 from soilbin.meshes import BUILDERS  # noqa: E402
 from soilbin.problem import SoilProblem  # noqa: E402
 from soilbin.records.scene import load_scene  # noqa: E402
@@ -78,7 +79,7 @@ def main():
     try:
         result = problem.solve()
         outcome = dict(converged=True, newton=result.iterations)
-    except Exception as err:   # report what was measured before the failure
+    except ConvergenceError as err:   # report what was measured before the failure
         outcome = dict(converged=False, message=str(err))
     summary = dict(**setup, **outcome, iterations=iterations,
                    draft=problem.observe().force if outcome["converged"] else None,

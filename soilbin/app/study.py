@@ -297,9 +297,9 @@ def earlier_summary(case, folder):
         resolved = (folder / "scene.toml").read_text()
     except (OSError, ValueError):
         return None
-    if summary.get("overrides") != list(case.overrides):
-        return None
-    if resolved != case.scene.resolved() and _read_now(folder / "scene.toml") != case.scene.resolved():
+    wanted = case.scene.resolved()
+    if summary.get("overrides") != list(case.overrides) or (
+            resolved != wanted and _read_now(folder / "scene.toml") != wanted):
         return None
     return summary
 
@@ -514,8 +514,9 @@ sets, e.g. E=4500,magnitude=50. Every summary.json lists the case's
 "overrides". DIR (default runs/<study file name>) collects table.csv,
 table.md and the figures. Run it again to resume: a case whose folder holds
 the summary of a run of the same overrides and the same resolved scene (read
-by the present soilbin: a key added since takes its default) is not run again (a failed one neither, unless --retry-failed); an interrupted one
-runs from the start. SIGINT/SIGTERM stop the running cases and
+by the present soilbin: a key added since takes its default) is not run again
+(a failed one neither, unless --retry-failed); an interrupted one runs from
+the start. SIGINT/SIGTERM stop the running cases and
 write the table and figures of the finished ones.
 
 exit status: 0 every case complete (or collapse), 1 some case failed or
