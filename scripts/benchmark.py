@@ -35,19 +35,27 @@ STRIP_LOAD, BLOCK = "strip-load-von-mises", "block-drucker-prager"
 TINE_LEVELS = ((1.0, 1.3), (0.75, 1.3), (0.5, 1.3), (0.35, 1.3))
 
 
+#: The footing scene's problem on the one-hex slab it was solved on before (same solution).
+SLAB = ["mesh.dimension=3", "analysis.element=hex8-bbar"]
+#: A coarse mesh for quad9-bbar: edge cells of 0.02 in growing by 0.3 per in, up to 2 in.
+COARSE = ["mesh.edge_size=0.02", "mesh.size_growth=0.3", "mesh.far_size=2"]
+
+
 def cases(quick):
     """(name, scene, overrides)."""
     for r in (1, 2) if quick else (1, 2, 3, 4):
         yield f"footing, refine={r}", FOOTING, [f"mesh.refine={r}"]
     yield "footing, refine=2, LU", FOOTING, ["mesh.refine=2", "solver.linear=lu"]
-    for r in (1, 2):   # the scene before its edge cells of 0.005 and the cp line search
-        yield (f"footing, refine={r}, edge_size=0.02, bt", FOOTING,
-               [f"mesh.refine={r}", "mesh.edge_size=0.02", "solver.line_search=bt"])
-    yield "footing hex8, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=hex8"]
-    if not quick:   # hex27-bbar takes minutes
-        for r in (1, 2):
-            yield (f"footing hex27-bbar, refine={r}", FOOTING,
-                   [f"mesh.refine={r}", "analysis.element=hex27-bbar"])
+    for r in (1,) if quick else (1, 2):
+        yield f"footing slab, refine={r}", FOOTING, [f"mesh.refine={r}", *SLAB]
+    yield "footing quad4, refine=1", FOOTING, ["mesh.refine=1", "analysis.element=quad4"]
+    yield "footing quad9-bbar, coarse", FOOTING, ["analysis.element=quad9-bbar", *COARSE]
+    for r in (1,) if quick else (1, 2):
+        yield (f"footing quad9-bbar, refine={r}", FOOTING,
+               [f"mesh.refine={r}", "analysis.element=quad9-bbar"])
+    if not quick:   # the slab's quadratic element takes minutes
+        yield ("footing slab hex27-bbar, refine=1", FOOTING,
+               ["mesh.refine=1", "mesh.dimension=3", "analysis.element=hex27-bbar"])
     yield "column, nz=24", COLUMN, ["mesh.nz=24"]
     yield "tine, refine=1", TINE, []
     if quick:

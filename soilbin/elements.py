@@ -1,14 +1,27 @@
-"""Finite elements by name, and the one cell type of every mesh (records level: no FEniCSx).
+"""Finite elements by name, their cells, and where a two-dimensional mesh lies (records
+level: no FEniCSx).
 
-Every mesh is made of 8-node hexahedra: the gmsh builders check that
-(:mod:`soilbin.meshes.tagged`), the spaces are built on them
-(:mod:`soilbin.forms.discretisation`) and the Gauss rules are theirs
-(:mod:`soilbin.solver.quadrature`); all three take the cell from :data:`CELL`.
+Every mesh is made of 8-node hexahedra, or, for plane strain, of 4-node
+quadrilaterals in the scene's x-z plane: the mesh's axes 0 and 1 are the
+scene's x and z (:data:`PLANE_AXES`), y is the direction held by plane strain.
+The gmsh builders check the cells (:mod:`soilbin.meshes.tagged`), the spaces
+are built on them (:mod:`soilbin.forms.discretisation`) and the Gauss rules
+are theirs (:mod:`soilbin.solver.quadrature`); each element names its cell.
 """
 import enum
 
-#: The cell of every mesh, by its DOLFINx / Basix / UFL name (gmsh: "Hexahedron", order 1).
-CELL = "hexahedron"
+import numpy as np
+
+#: The cell of a mesh of each dimension, by its DOLFINx / Basix / UFL name.
+CELLS = {3: "hexahedron", 2: "quadrilateral"}
+#: The scene's axes along which a two-dimensional mesh's axes 0 and 1 lie.
+PLANE_AXES = (0, 2)
+
+
+def embedding(dimension):
+    """The (3, dimension) matrix whose columns are the mesh's axes in the scene's: a point or
+    vector with ``dimension`` components x is E x in the scene's three."""
+    return np.eye(3) if dimension == 3 else np.eye(3)[:, PLANE_AXES]
 
 
 class Element(enum.Enum):
@@ -23,23 +36,50 @@ class Element(enum.Enum):
     are driven to the cone's apex and the rest lock (README, VII.3). A brick with
     one point has hourglass modes (zero-energy nodal patterns); the supports must
     hold the mesh against them, as in the plane-strain slabs.
+
+    The ``quad`` elements are the same on quadrilaterals of a plane-strain mesh:
+    on a slab of one hex layer whose nodes move alike in y, hex8-bbar and
+    quad4-bbar give one discrete solution.
     """
     HEX8 = "hex8"
     HEX8_REDUCED = "hex8-reduced"
     HEX8_BBAR = "hex8-bbar"
     HEX27 = "hex27"
     HEX27_BBAR = "hex27-bbar"
+    QUAD4 = "quad4"
+    QUAD4_REDUCED = "quad4-reduced"
+    QUAD4_BBAR = "quad4-bbar"
+    QUAD9 = "quad9"
+    QUAD9_BBAR = "quad9-bbar"
+
+    @property
+    def dimension(self):
+        return 2 if self.value.startswith("quad") else 3
+
+    @property
+    def cell(self):
+        return CELLS[self.dimension]
 
     @property
     def degree(self):
-        return 1 if self in (Element.HEX8, Element.HEX8_REDUCED, Element.HEX8_BBAR) else 2
+        return 2 if self.value.split("-")[0] in ("hex27", "quad9") else 1
 
     @property
     def mixed(self):
-        return self in (Element.HEX8_BBAR, Element.HEX27_BBAR)
+        return self.value.endswith("-bbar")
+
+    @property
+    def reduced(self):
+        return self.value.endswith("-reduced")
 
     @property
     def quadrature_degree(self):
-        """Gauss rule: 2x2x2 points for trilinear, 3x3x3 for triquadratic, and the
-        centre (degree 1, one point) for hex8-reduced."""
-        return 1 if self is Element.HEX8_REDUCED else 2 * self.degree
+        """Gauss rule: 2 points per direction for (tri)linear, 3 for (tri)quadratic, and the
+        centre (degree 1, one point) for the reduced elements."""
+        return 1 if self.reduced else 2 * self.degree
+
+    def on(self, dimension):
+        """The element of the same kind on cells of ``dimension`` (hex8-bbar <-> quad4-bbar)."""
+        kinds = {e.dimension: e for e in Element if (e.degree, e.mixed, e.reduced)
+                 == (self.degree, self.mixed, self.reduced)}
+        return kinds[dimension]

@@ -88,8 +88,10 @@ def test_rollers_and_gravity_in_a_rotated_frame(tmp_path, large):
 
 
 def test_plane_strain_footing_in_a_rotated_frame():
-    """The strip footing (rollers, plane strain, hex8-bbar) turned: the same first steps."""
-    overrides = ("loading.steps=40", "mesh.edge_size=0.2", "mesh.far_size=2.0")
+    """The strip footing on its slab (rollers, plane strain, hex8-bbar) turned: the same first
+    steps."""
+    overrides = ("loading.steps=40", "mesh.edge_size=0.2", "mesh.far_size=2.0", "mesh.dimension=3",
+                 "analysis.element=hex8-bbar")
     curves = []
     for rotation in ([0.0, 0.0, 0.0], ROTATION):
         problem = make_problem("strip-footing-von-mises", f"analysis.frame_rotation={rotation}",

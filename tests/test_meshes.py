@@ -12,7 +12,7 @@ from mpi4py import MPI
 
 from soilbin.errors import InputError
 from soilbin.meshes import BUILDERS, StripFootingParams
-from soilbin.elements import CELL
+from soilbin.elements import CELLS
 from soilbin.meshes.blocks import entities_within, extruded_grid
 from soilbin.meshes.segments import Segment
 from soilbin.meshes.tagged import build_tagged_mesh
@@ -174,7 +174,7 @@ def test_a_geometry_that_makes_other_groups_than_declared_is_refused():
 
 def test_every_mesh_is_made_of_the_one_cell_type(box, slab):
     for tm in (box, slab):
-        assert tm.mesh.topology.cell_type.name == CELL
+        assert tm.mesh.topology.cell_type.name == CELLS[3]
 
 
 @pytest.mark.parametrize("tm_name, refine", [("slab", 1), ("slab2", 2)])

@@ -41,9 +41,9 @@ def test_rigid_footing_limit_pressure_prandtl(solve, c, E):
     assert pressure[-1] == pytest.approx(pressure[-2], rel=1e-3)
 
 
-def test_plain_trilinear_bricks_lock(solve):
-    """Why the footing scene uses hex8-bbar: plain hex8 overestimates the limit by > 5%."""
-    summary, _ = solve("strip-footing-von-mises", "analysis.element=hex8")
+def test_plain_bilinear_quadrilaterals_lock(solve):
+    """Why the footing scene uses quad4-bbar: plain quad4 overestimates the limit by > 5%."""
+    summary, _ = solve("strip-footing-von-mises", "analysis.element=quad4")
     assert summary["limit_pressure"] > 1.05 * prandtl_limit_pressure(17.5)
 
 

@@ -20,7 +20,7 @@ def region_depths(tagged, region):
     mesh = tagged.mesh
     cells = tagged.cell_tags.find(tagged.regions[region])
     dofmap = mesh.geometry.dofmap.array.reshape(-1, mesh.geometry.dofmap.links(0).size)
-    z = mesh.geometry.x[dofmap[cells].ravel(), 2]
+    z = mesh.geometry.x[dofmap[cells].ravel(), mesh.geometry.dim - 1]   # z: the mesh's last axis
     return (mesh.comm.allreduce(z.min(initial=np.inf), op=MPI.MIN),
             mesh.comm.allreduce(z.max(initial=-np.inf), op=MPI.MAX))
 

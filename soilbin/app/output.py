@@ -14,6 +14,7 @@ from dolfinx.cpp.io import perm_vtk
 from dolfinx.cpp.mesh import entities_to_geometry
 from dolfinx.mesh import CellType
 
+from ..elements import embedding
 from ..records.scene import TOOL
 from .interrupt import deferred
 from .xdmf import XdmfSeries
@@ -53,19 +54,25 @@ def _gather(comm, array):
 
 class MeshData:
     """The soil mesh as one process writes it: the nodes of the P1 displacement space in
-    global order, the hexahedra (VTK node order), and any field's node or cell values."""
+    global order and in the scene's three coordinates, the hexahedra or quadrilaterals (VTK
+    node order, :attr:`topology`), and any field's node or cell values (a vector of a
+    two-dimensional mesh with its y component 0)."""
 
     def __init__(self, point_space):
         mesh = point_space.mesh
         self.comm = mesh.comm
+        self._dim = mesh.geometry.dim
         imap = point_space.dofmap.index_map
         self._owned = imap.size_local
-        self._n_cells = mesh.topology.index_map(3).size_local
+        self._n_cells = mesh.topology.index_map(mesh.topology.dim).size_local
         self._cell_nodes = point_space.dofmap.list.array.reshape(
             -1, point_space.dofmap.cell_dofs(0).size)
         cells = imap.local_to_global(self._cell_nodes[:self._n_cells].ravel())
-        perm = perm_vtk(CellType.hexahedron, self._cell_nodes.shape[1])
-        self.points = _gather(self.comm, point_space.tabulate_dof_coordinates()[:self._owned])
+        cell_type, self.topology = ((CellType.hexahedron, "Hexahedron") if self._dim == 3
+                                    else (CellType.quadrilateral, "Quadrilateral"))
+        perm = perm_vtk(cell_type, self._cell_nodes.shape[1])
+        x = point_space.tabulate_dof_coordinates()[:self._owned, :self._dim]
+        self.points = _gather(self.comm, x @ embedding(self._dim).T)
         self.cells = _gather(self.comm, cells.reshape(-1, self._cell_nodes.shape[1])[:, perm])
 
     def values(self, function):
@@ -73,6 +80,9 @@ class MeshData:
         space = function.function_space
         bs = space.dofmap.index_map_bs
         local = function.x.array.reshape(-1, bs)
+        if bs == self._dim == 2:   # a vector in the x-z plane
+            local = local @ embedding(2).T
+            bs = 3
         dofs = space.dofmap.list.array.reshape(len(self._cell_nodes), -1)
         if space.ufl_element().degree() == 0:
             values, on_nodes = local[dofs[:self._n_cells, 0]], False
@@ -108,7 +118,7 @@ class FieldWriter:
         self._mesh = MeshData(problem.displacement().function_space)
         rank0 = problem.comm.rank == 0
         self._soil = (XdmfSeries(folder / "fields.xdmf", self._mesh.points, self._mesh.cells,
-                                 "Hexahedron", CONVENTIONS) if rank0 else None)
+                                 self._mesh.topology, CONVENTIONS) if rank0 else None)
         self._tool, self._direction = None, None
         if problem.tool is not None:
             points, quads = tool_surface(problem)

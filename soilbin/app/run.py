@@ -159,7 +159,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "status": status,
         "converged": status in ("complete", "collapse"),
         "message": result.message,
-        "n_cells": tagged.mesh.topology.index_map(3).size_global,
+        "n_cells": tagged.mesh.topology.index_map(tagged.mesh.topology.dim).size_global,
         "n_dofs": problem.n_dofs,
         "n_ranks": comm.size,
         "n_steps": len(records),

@@ -11,6 +11,11 @@ only cell-interior unknowns to the direct solve.
 In a rotated frame (``problem.frame``) the displacement dofs are components
 along the scene's own axes, the columns of ``basis`` in the world: the forms
 see u = basis · u_dofs, and every support or roller holds a dof.
+
+On a two-dimensional mesh (plane strain in the x-z plane, ``elements``) the
+dofs are the x and z components. The forms see the three-dimensional
+displacement u = (u_x, 0, u_z) and its 3 x 3 gradient, whose y row and column
+are zero, so the models integrate the full stress state as in the slab.
 """
 import dataclasses
 from typing import Optional
@@ -20,7 +25,12 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from ..elements import CELL, Element
+from ..elements import PLANE_AXES, Element, embedding
+
+
+def _embedded(a):
+    """A UFL vector of the mesh's two axes as the scene's three (0 along y)."""
+    return ufl.as_vector([a[0], 0, a[1]])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -33,8 +43,11 @@ class Discretisation:
     @classmethod
     def create(cls, mesh, element, basis=None):
         cell = mesh.ufl_cell()
-        if cell.cellname() != CELL:
-            raise ValueError(f"{element.value} needs a mesh of {CELL} cells, not {cell.cellname()}")
+        if cell.cellname() != element.cell:
+            raise ValueError(f"{element.value} needs a mesh of {element.cell} cells, not "
+                             f"{cell.cellname()}")
+        if basis is not None and mesh.geometry.dim != 3:
+            raise ValueError("a two-dimensional mesh cannot be turned out of its plane")
         ve = ufl.VectorElement("Lagrange", cell, element.degree)
         if not element.mixed:
             space = fem.FunctionSpace(mesh, ve)
@@ -49,6 +62,42 @@ class Discretisation:
     def mesh(self):
         return self.space.mesh
 
+    @property
+    def dimension(self):
+        """The mesh's: 3, or 2 (plane strain in the x-z plane)."""
+        return self.mesh.geometry.dim
+
+    @property
+    def planar(self):
+        return self.dimension == 2
+
+    def component(self, axis):
+        """The displacement dof component along the scene's ``axis`` (0, 1, 2 for x, y, z);
+        None for y on a two-dimensional mesh (plane strain holds it)."""
+        if not self.planar:
+            return axis
+        return PLANE_AXES.index(axis) if axis in PLANE_AXES else None
+
+    def grad(self, a):
+        """The 3 x 3 gradient of a UFL 3-vector field (its y column zero in plane strain)."""
+        g = ufl.grad(a)
+        if not self.planar:
+            return g
+        return ufl.as_matrix([[g[i, 0], 0, g[i, 1]] for i in range(3)])
+
+    def div(self, a):
+        return ufl.tr(self.grad(a)) if self.planar else ufl.div(a)
+
+    def normal(self):
+        """The outward unit normal of the facets, in the scene's three components."""
+        n = ufl.FacetNormal(self.mesh)
+        return _embedded(n) if self.planar else n
+
+    def coordinates(self):
+        """The position, in the scene's three components (UFL)."""
+        x = ufl.SpatialCoordinate(self.mesh)
+        return _embedded(x) if self.planar else x
+
     def measure(self, **kwargs):
         """The cell measure whose rule matches the quadrature spaces."""
         q = self.element.quadrature_degree
@@ -62,15 +111,24 @@ class Discretisation:
                            metadata={"quadrature_degree": self.element.quadrature_degree})
 
     def displacement(self, w):
-        """Displacement part (world components) of a function, trial or test function of
-        ``space``."""
+        """Displacement part (world components, three) of a function, trial or test function
+        of ``space``."""
         u = ufl.split(w)[0] if self.element.mixed else w
+        if self.planar:
+            return _embedded(u)
         return u if self.basis is None else ufl.dot(ufl.as_matrix(self.basis), u)
 
-    def to_world(self, values):
-        """Nodal displacement dofs (n, 3) as world components."""
+    def in_mesh_axes(self, values):
+        """Nodal displacement dofs (n, dimension) along the mesh's axes (the world's in 3D)."""
         return values if self.basis is None else values @ np.array(self.basis).T
 
+    def to_world(self, values):
+        """Points or vectors along the mesh's axes (n, dimension) in the world's three."""
+        return values @ embedding(2).T if self.planar else values
+
     def in_dof_axes(self, points):
-        """World points (n, 3) in the dofs' axes (rigid-body modes are built on these)."""
+        """Points of the mesh (n, 3; in 2D the third coordinate is 0) in the dofs' axes
+        (n, dimension): rigid-body modes are built on these."""
+        if self.planar:
+            return points[:, :2]
         return points if self.basis is None else points @ np.array(self.basis)

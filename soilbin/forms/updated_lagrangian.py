@@ -37,7 +37,7 @@ def _cayley(W):
 def kinematics(disc, w):
     """(F, Δε, R, R½) of the increment in ``w`` on the current mesh Ω_n."""
     I = ufl.Identity(3)
-    grad_du = ufl.grad(disc.displacement(w))
+    grad_du = disc.grad(disc.displacement(w))
     L = grad_du * ufl.inv(I + grad_du / 2)
     W = ufl.skew(L)
     return I + grad_du, ufl.sym(L), _cayley(W), _cayley(W / 2)
@@ -63,7 +63,7 @@ def internal_force(disc, points, w, v):
     sigma_hat = points.stress + ufl.dot(points.tangent, deps_hat - points.strain)
     sigma = R * ufl_from_mandel(sigma_hat) * R.T
     dx = disc.measure()
-    grad_v = ufl.grad(disc.displacement(v)) * ufl.inv(F)
+    grad_v = disc.grad(disc.displacement(v)) * ufl.inv(F)
     if not disc.element.mixed:
         return J * ufl.inner(sigma, grad_v) * dx
     _, theta, p = ufl.split(w)

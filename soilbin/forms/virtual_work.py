@@ -16,16 +16,12 @@ import ufl
 from ..tensors import ufl_mandel
 
 
-def strain(u):
-    return ufl.sym(ufl.grad(u))
-
-
 def enhanced_strain(disc, w):
     """ε̄ of a (mixed) function: the strain the constitutive law sees."""
-    u = disc.displacement(w)
+    eps = ufl.sym(disc.grad(disc.displacement(w)))
     if not disc.element.mixed:
-        return strain(u)
-    return ufl.dev(strain(u)) + ufl.split(w)[1] / 3.0 * ufl.Identity(3)
+        return eps
+    return ufl.dev(eps) + ufl.split(w)[1] / 3.0 * ufl.Identity(3)
 
 
 def _constraint(disc, w, w_hat):
@@ -33,7 +29,7 @@ def _constraint(disc, w, w_hat):
     _, theta, p = ufl.split(w)
     _, psi, q = ufl.split(w_hat)
     u, v = disc.displacement(w), disc.displacement(w_hat)
-    return (p * (ufl.div(v) - psi) + q * (ufl.div(u) - theta)) * disc.measure()
+    return (p * (disc.div(v) - psi) + q * (disc.div(u) - theta)) * disc.measure()
 
 
 def internal_force(disc, sigma_q, w, v):

@@ -3,7 +3,9 @@
 A builder declares, in one place, its parameter record, the cell groups
 (regions) and facet groups (boundaries) of every mesh it makes, which of the
 boundaries are the contact surface of a rigid tool, and the module whose
-``geometry(params)`` builds the gmsh model. That module is imported only
+``geometry(params)`` builds the gmsh model. A plane-strain builder may also
+make a two-dimensional mesh in the x-z plane (its parameter ``dimension``):
+then the faces of the slab in y (``slab_faces``) are not among its boundaries. That module is imported only
 when a mesh is built, so a scene can be read without gmsh; building checks
 that the geometry made exactly the declared groups, none of them empty.
 """
@@ -29,6 +31,7 @@ class Builder:
     boundaries: tuple[str, ...]  # facet groups of every mesh it builds
     contact: tuple[str, ...]     # the boundaries a rigid tool acts on (the default tool.faces)
     geometry: str                # module (in soilbin.meshes) with geometry(params) -> (regions, boundaries)
+    slab_faces: tuple[str, ...] = ()  # boundaries only a three-dimensional mesh has
 
     def __post_init__(self):
         stray = set(self.contact) - set(self.boundaries)
@@ -39,9 +42,17 @@ class Builder:
         """``params`` with any file they name found relative to ``folder`` (the scene's)."""
         return params
 
+    @staticmethod
+    def dimension(params):
+        """The dimension of the meshes built with ``params``: 3, or 2 (x-z plane)."""
+        return getattr(params, "dimension", 3)
+
     def groups(self, params):
         """(regions, boundaries, contact) of the meshes built with ``params``."""
-        return self.regions, self.boundaries, self.contact
+        boundaries = self.boundaries
+        if self.dimension(params) == 2:
+            boundaries = tuple(b for b in boundaries if b not in self.slab_faces)
+        return self.regions, boundaries, self.contact
 
     def label(self, params):
         """What the scene's messages call the source of the groups."""
@@ -51,8 +62,9 @@ class Builder:
         """Mesh with gmsh on rank 0 and distribute over ``comm``: a TaggedMesh."""
         from .tagged import build_tagged_mesh
         geometry = importlib.import_module(f"{__package__}.{self.geometry}").geometry
-        return build_tagged_mesh(comm, self.name, lambda: geometry(params),
-                                 regions=self.regions, boundaries=self.boundaries)
+        regions, boundaries, _ = self.groups(params)
+        return build_tagged_mesh(comm, self.name, lambda: geometry(params), regions=regions,
+                                 boundaries=boundaries, dimension=self.dimension(params))
 
 
 def check_cell_count(cells, keys):
@@ -68,6 +80,11 @@ MAX_LENGTH = 1.0e6
 def length_param(default, doc):
     """A positive, finite length of the geometry."""
     return param(default, lo=0.0, hi=MAX_LENGTH, lo_open=True, doc=doc)
+
+
+def dimension_param():
+    return param(3, lo=2, hi=3, doc="3: a slab of one hex layer in y; 2: quadrilaterals in the "
+                                    "x-z plane (plane strain solved in 2D, a third of the unknowns)")
 
 
 def refine_param(doc):

@@ -3,7 +3,7 @@ named physical groups, hexahedra only, distributed like a built mesh."""
 import gmsh
 
 from ..errors import InputError
-from .tagged import check_hexahedra, distribute
+from .tagged import check_cells, distribute
 
 
 def read_tagged_mesh(comm, path, regions, boundaries):
@@ -13,7 +13,7 @@ def read_tagged_mesh(comm, path, regions, boundaries):
             gmsh.open(path)
         except Exception as err:
             raise InputError(f"mesh.file = {path!r}: gmsh cannot read it ({err})") from None
-        check_hexahedra(InputError, f"mesh.file = {path!r} has")
+        check_cells(InputError, f"mesh.file = {path!r} has")
         tags = {(dim, gmsh.model.getPhysicalName(dim, tag)): tag
                 for dim, tag in gmsh.model.getPhysicalGroups()}
         return ({name: tags[3, name] for name in regions},

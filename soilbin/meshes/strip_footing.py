@@ -7,7 +7,8 @@ is singular at the footing edge (x = b, z = 0) and the collapse mechanism
 (Prandtl's wedge, fan and passive zone) spreads from it, so the in-plane
 mesh is unstructured quadrilaterals whose size grows linearly with the
 distance r from the edge, h(r) = min(edge_size + size_growth * r, far_size),
-extruded to one layer of hexahedra. All sizes scale with 1/refine.
+extruded to one layer of hexahedra, or (``dimension = 2``) left as the
+plane-strain mesh itself. All sizes scale with 1/refine.
 
 Optionally (``corner_size`` > 0) the rectangle [b − a, b + a] x [−a, 0], a = 3
 corner_size, around the edge is a grid of 6 x 3 squares of side corner_size,
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 
 from ..errors import InputError
 from ..params import Params, param
-from .builder import Builder, check_cell_count, length_param, refine_param
+from .builder import Builder, check_cell_count, dimension_param, length_param, refine_param
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,7 @@ class StripFootingParams(Params):
     corner_size: float = param(0.0, lo=0.0, doc="side of the 6 x 3 squares around the footing edge, "
                                                 "not divided by refine (0: none)")
     refine: int = refine_param("divides every element size (refine = 2 gives about 4x the cells)")
+    dimension: int = dimension_param()
 
     def __post_init__(self):
         super().__post_init__()
@@ -69,6 +71,7 @@ class StripFootingParams(Params):
 
 STRIP_FOOTING = Builder(
     name="strip_footing", params=StripFootingParams,
-    summary="plane-strain half slab (one hex layer in y) under a strip footing, graded toward its edge",
+    summary="plane-strain half slab (one hex layer in y, or 2D) under a strip footing, graded "
+            "toward its edge",
     regions=("soil",), boundaries=("footing", "surface", "symmetry", "far", "base", "front", "back"),
-    contact=(), geometry="strip_footing_geometry")
+    contact=(), geometry="strip_footing_geometry", slab_faces=("front", "back"))

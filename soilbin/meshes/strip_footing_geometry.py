@@ -1,5 +1,6 @@
 """The strip-footing builder's gmsh geometry (declaration: :mod:`.strip_footing`):
-quadrilaterals graded from the footing edge, extruded to one layer of hexahedra."""
+quadrilaterals graded from the footing edge in the x-z plane, extruded to one layer of
+hexahedra unless the mesh is two-dimensional."""
 import gmsh
 
 from .blocks import entities_within
@@ -70,19 +71,21 @@ def geometry(p: StripFootingParams):
     sections = [geo.addPlaneSurface([geo.addCurveLoop(lines)])] + squares
     for section in sections:
         geo.mesh.setRecombine(2, section)
-    geo.extrude([(2, s) for s in sections], 0.0, p.thickness, 0.0, numElements=[1],
-                recombine=True)
+    if p.dimension == 3:
+        geo.extrude([(2, s) for s in sections], 0.0, p.thickness, 0.0, numElements=[1],
+                    recombine=True)
     geo.synchronize()
     graded_quadrilaterals(edge, p)
     if squares:   # Blossom leaves triangles beside the squares after Frontal-Delaunay
         gmsh.model.mesh.setAlgorithm(2, sections[0], 5)   # Delaunay
+    facet = p.dimension - 1
     boundaries = {
-        "footing": entities_within(2, x=(0.0, b), z=0.0),
-        "surface": entities_within(2, x=(b, p.width), z=0.0),
-        "symmetry": entities_within(2, x=0.0),
-        "far": entities_within(2, x=p.width),
-        "base": entities_within(2, z=-p.depth),
-        "front": entities_within(2, y=0.0),
-        "back": entities_within(2, y=p.thickness),
+        "footing": entities_within(facet, x=(0.0, b), z=0.0),
+        "surface": entities_within(facet, x=(b, p.width), z=0.0),
+        "symmetry": entities_within(facet, x=0.0),
+        "far": entities_within(facet, x=p.width),
+        "base": entities_within(facet, z=-p.depth),
     }
-    return {"soil": entities_within(3)}, boundaries
+    if p.dimension == 3:
+        boundaries.update(front=entities_within(2, y=0.0), back=entities_within(2, y=p.thickness))
+    return {"soil": entities_within(p.dimension)}, boundaries

@@ -9,10 +9,12 @@ import gmsh
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
-from ..elements import CELL
 from ..errors import InputError
 
-#: Group name -> gmsh entity tags (volumes for regions, surfaces for boundaries).
+#: gmsh's name of the cell of a mesh of each dimension.
+GMSH_CELLS = {3: "Hexahedron", 2: "Quadrangle"}
+#: Group name -> gmsh entity tags (volumes for regions, surfaces for boundaries; in a
+#: two-dimensional mesh surfaces and curves).
 Groups = dict[str, list[int]]
 
 
@@ -28,23 +30,27 @@ class TaggedMesh:
 
 
 def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Groups, Groups]], *,
-                      regions: tuple[str, ...], boundaries: tuple[str, ...]) -> TaggedMesh:
+                      regions: tuple[str, ...], boundaries: tuple[str, ...],
+                      dimension: int = 3) -> TaggedMesh:
     """Mesh the gmsh model made by ``geometry`` on rank 0 and distribute it.
 
-    ``geometry`` builds and synchronizes the model and returns the volumes of
-    each region and the surfaces of each boundary; they must be exactly the
-    declared ``regions`` and ``boundaries``, none empty. Groups are tagged
-    1, 2, ... in the declared order, regions first, so no two groups share a tag.
+    ``geometry`` builds and synchronizes the model and returns the entities of
+    ``dimension`` of each region and those one dimension lower of each
+    boundary; they must be exactly the declared ``regions`` and ``boundaries``,
+    none empty. Groups are tagged 1, 2, ... in the declared order, regions
+    first, so no two groups share a tag. A two-dimensional geometry is built and
+    meshed in the x-z plane, as the scene sees it.
     """
     def model():
         gmsh.model.add(name)
         made_regions, made_boundaries = geometry()
-        return _mesh_hexahedra(_as_declared(name, "regions", regions, made_regions),
-                               _as_declared(name, "boundaries", boundaries, made_boundaries))
-    return distribute(comm, name, model)
+        return _mesh_cells(_as_declared(name, "regions", regions, made_regions),
+                           _as_declared(name, "boundaries", boundaries, made_boundaries), dimension)
+    return distribute(comm, name, model, dimension)
 
 
-def distribute(comm: MPI.Comm, name: str, model: Callable[[], tuple[dict, dict]]) -> TaggedMesh:
+def distribute(comm: MPI.Comm, name: str, model: Callable[[], tuple[dict, dict]],
+               dimension: int = 3) -> TaggedMesh:
     """Run ``model()`` on rank 0 (it makes the meshed gmsh model and returns the tag of each
     region and boundary) and distribute the mesh. If it fails, every rank raises: an
     InputError as the same InputError, anything else as a RuntimeError."""
@@ -64,10 +70,35 @@ def distribute(comm: MPI.Comm, name: str, model: Callable[[], tuple[dict, dict]]
             groups, (kind, message) = comm.bcast(None, root=0)
             if groups is None:
                 raise kind(message)
-        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=3)
+        model = gmsh.model if dimension == 3 else _InPlane(gmsh.model)
+        mesh, cell_tags, facet_tags = gmshio.model_to_mesh(model, comm, 0, gdim=dimension)
     finally:
         gmsh.finalize()
     return TaggedMesh(mesh, cell_tags, facet_tags, *groups)
+
+
+class _InPlane:
+    """gmsh.model as DOLFINx reads a mesh from it, with the nodes of the x-z plane seen in
+    the x-y plane ((x, 0, z) as (x, z, 0)): a two-dimensional mesh's axes are x and z."""
+
+    def __init__(self, model):
+        self._model = model
+        self.mesh = _InPlaneNodes(model.mesh)
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+
+class _InPlaneNodes:
+    def __init__(self, mesh):
+        self._mesh = mesh
+
+    def __getattr__(self, name):
+        return getattr(self._mesh, name)
+
+    def getNodes(self, *args, **kwargs):
+        tags, x, parametric = self._mesh.getNodes(*args, **kwargs)
+        return tags, x.reshape(-1, 3)[:, [0, 2, 1]].ravel(), parametric
 
 
 def _as_declared(name: str, kind: str, declared: tuple[str, ...], made: Groups) -> Groups:
@@ -77,24 +108,28 @@ def _as_declared(name: str, kind: str, declared: tuple[str, ...], made: Groups) 
     return {group: made[group] for group in declared}
 
 
-def _mesh_hexahedra(regions: Groups, boundaries: Groups) -> tuple[dict[str, int], dict[str, int]]:
-    """Add the physical groups, mesh in 3D, and check that only hexahedra were made."""
-    unassigned = {t for _, t in gmsh.model.getEntities(3)} - set().union(*regions.values())
+def _mesh_cells(regions: Groups, boundaries: Groups, dimension: int) -> tuple[dict[str, int], dict[str, int]]:
+    """Add the physical groups, mesh, and check the cells (hexahedra, or quadrilaterals)."""
+    unassigned = {t for _, t in gmsh.model.getEntities(dimension)} - set().union(*regions.values())
     if unassigned:
-        raise RuntimeError(f"volumes {sorted(unassigned)} are in no region; their cells would be lost")
+        raise RuntimeError(f"entities {sorted(unassigned)} of dimension {dimension} are in no "
+                           "region; their cells would be lost")
     numbers = itertools.count(1)
-    tags = _add_physical_groups(3, regions, numbers), _add_physical_groups(2, boundaries, numbers)
-    gmsh.model.mesh.generate(3)
-    check_hexahedra(RuntimeError, "gmsh made")
+    tags = (_add_physical_groups(dimension, regions, numbers),
+            _add_physical_groups(dimension - 1, boundaries, numbers))
+    gmsh.model.mesh.generate(dimension)
+    check_cells(RuntimeError, "gmsh made", dimension)
     return tags
 
 
-def check_hexahedra(error, source):
-    """Raise ``error`` unless the model's 3D elements are all 8-node hexahedra."""
-    types = list(gmsh.model.mesh.getElementTypes(3))
-    if types != [gmsh.model.mesh.getElementType(CELL, 1)]:
+def check_cells(error, source, dimension=3):
+    """Raise ``error`` unless the model's elements of ``dimension`` are all 8-node hexahedra
+    (4-node quadrilaterals in 2D)."""
+    types = list(gmsh.model.mesh.getElementTypes(dimension))
+    if types != [gmsh.model.mesh.getElementType(GMSH_CELLS[dimension], 1)]:
         made = ", ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
-        raise error(f"{source} 3D elements [{made}]; only 8-node hexahedra are supported")
+        only = "8-node hexahedra" if dimension == 3 else "4-node quadrilaterals"
+        raise error(f"{source} {dimension}D elements [{made}]; only {only} are supported")
 
 
 def _add_physical_groups(dim: int, groups: Groups, numbers) -> dict[str, int]:

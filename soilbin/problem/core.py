@@ -155,11 +155,12 @@ class SoilProblem:
         return self.kinematics.displacement_p1()
 
     def nodal_displacement(self):
-        """(initial coordinates, total displacement), each (n, 3), at the owned mesh nodes."""
+        """(initial coordinates, total displacement), each (n, 3) in the scene's axes, at the
+        owned mesh nodes."""
         u = self.displacement()
         owned = u.function_space.dofmap.index_map.size_local
-        displacement = u.x.array.reshape(-1, 3)[:owned]
-        x = u.function_space.tabulate_dof_coordinates()[:owned]
+        displacement = self.disc.to_world(u.x.array.reshape(-1, self.disc.dimension)[:owned])
+        x = self.disc.to_world(u.function_space.tabulate_dof_coordinates()[:owned, :self.disc.dimension])
         return x - displacement * self.moves_mesh, displacement
 
     def output_fields(self, names):

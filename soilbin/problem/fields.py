@@ -46,7 +46,7 @@ def _displacement(problem):
 
 def _stress(problem):
     mesh = problem.mesh
-    s = fem.Function(fem.TensorFunctionSpace(mesh, ("DG", 0)), name="stress")
+    s = fem.Function(fem.TensorFunctionSpace(mesh, ("DG", 0), shape=(3, 3)), name="stress")
     return s, CellAverage(problem.disc, ufl_from_mandel(problem.points.stress), s)
 
 

@@ -57,7 +57,7 @@ class SmallStrain:
 
     def volume_change(self):
         """Volumetric strain since the initial configuration, ε_v = div u (UFL)."""
-        return ufl.div(self.total_displacement())
+        return self._disc.div(self.total_displacement())
 
     def displacement_p1(self):
         """The total displacement as a P1 Function (for output)."""
@@ -65,8 +65,8 @@ class SmallStrain:
             self._p1 = fem.Function(fem.VectorFunctionSpace(self._disc.mesh, ("Lagrange", 1)),
                                     name="displacement")
         self._p1.interpolate(self._w.sub(0).collapse() if self._disc.element.mixed else self._w)
-        values = self._p1.x.array.reshape(-1, 3)
-        values[:] = self._disc.to_world(values)
+        values = self._p1.x.array.reshape(-1, self._disc.dimension)
+        values[:] = self._disc.in_mesh_axes(values)
         return self._p1
 
 
@@ -98,7 +98,7 @@ class UpdatedLagrangian:
     def area_stretch(self):
         """da/dA of a loaded facet (Nanson): tractions act per unit deformed area."""
         F = updated_lagrangian.kinematics(self._disc, self._w)[0]
-        return updated_lagrangian.surface_stretch(F, ufl.FacetNormal(self._disc.mesh))
+        return updated_lagrangian.surface_stretch(F, self._disc.normal())
 
     def commit(self, points):
         """Rotate the history, move the mesh, start the next increment from zero."""
@@ -110,11 +110,14 @@ class UpdatedLagrangian:
         points.update()   # the committed state: σ_{n+1} on the moved mesh
 
     def total_displacement(self):
-        return self._motion.total
+        """The displacement from the initial configuration (UFL, three components)."""
+        total = self._motion.total
+        return ufl.as_vector([total[0], 0, total[1]]) if self._disc.planar else total
 
     def volume_change(self):
         """dV/dV0 − 1 = 1/det(I − ∇u) − 1, with u the total displacement on the current mesh."""
-        return 1.0 / ufl.det(ufl.Identity(3) - ufl.grad(self._motion.total)) - 1.0
+        grad = self._disc.grad(self.total_displacement())
+        return 1.0 / ufl.det(ufl.Identity(3) - grad) - 1.0
 
     def displacement_p1(self):
         return self._motion.total
@@ -141,7 +144,7 @@ class MeshMotion:
         V1 = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
         self.total = fem.Function(V1, name="displacement")
         self._increment = fem.Function(V1)
-        cells = mesh.topology.index_map(3)
+        cells = mesh.topology.index_map(mesh.topology.dim)
         n_cells = cells.size_local + cells.num_ghosts
         self._nodes = mesh.geometry.dofmap.array.reshape(n_cells, -1).ravel()
         self._dofs = V1.dofmap.list.array.reshape(n_cells, -1).ravel()
@@ -156,8 +159,9 @@ class MeshMotion:
     def advance(self):
         source = self._w.sub(0).collapse() if self._disc.element.mixed else self._w
         self._increment.interpolate(source)
-        du = self._increment.x.array.reshape(-1, 3)
-        du[:] = self._disc.to_world(du)
-        self._x[self._nodes, :3] = self._x[self._nodes, :3] + du[self._dofs]
+        dim = self._disc.dimension
+        du = self._increment.x.array.reshape(-1, dim)
+        du[:] = self._disc.in_mesh_axes(du)
+        self._x[self._nodes, :dim] = self._x[self._nodes, :dim] + du[self._dofs]
         self.total.x.array[:] += self._increment.x.array
         self._w.x.array[self._reset] = 0.0

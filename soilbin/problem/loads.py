@@ -41,14 +41,19 @@ def probe(disc, tagged, boundaries, vector, supports, only=None):
     comm = disc.mesh.comm
     field = fem.Function(disc.space)
     for i in np.flatnonzero(vector):
-        dofs = np.concatenate([fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, name))
+        component = disc.component(i)
+        if component is None:   # y in plane strain: no dofs
+            continue
+        dofs = np.concatenate([fem.locate_dofs_topological(V.sub(component), tdim - 1,
+                                                           facets(tagged, name))
                                for name in boundaries])
         if only is not None:
             dofs = np.intersect1d(dofs, only)
         held = np.isin(dofs, supports.held)
         share = 1.0
         if comm.allreduce(bool(held.any()), op=MPI.LOR):   # collective: every rank assembles
-            own, support = tributary_areas(disc, tagged, (boundaries, supports.holding[i]), i)
+            own, support = tributary_areas(disc, tagged, (boundaries, supports.holding[i]),
+                                           component)
             share = np.where(held, own[dofs] / (own[dofs] + support[dofs]), 1.0)
         field.x.array[dofs] = vector[i] * share
     field.x.scatter_forward()
@@ -57,8 +62,8 @@ def probe(disc, tagged, boundaries, vector, supports, only=None):
 
 def tributary_areas(disc, tagged, groups, component):
     """For each tuple of facet group names in ``groups``, ∫ N_j dA over those groups for
-    every dof j of the displacement ``component``, in the unknown's numbering (zero at the
-    other dofs)."""
+    every dof j of the displacement dof ``component``, in the unknown's numbering (zero at
+    the other dofs)."""
     space, to_parent = disc.displacement_space.sub(component).collapse()
     dofs = disc.space.dofmap.index_map
     size = (dofs.size_local + dofs.num_ghosts) * disc.space.dofmap.index_map_bs
@@ -84,9 +89,10 @@ def traction(disc, kinematics, magnitude, vector, measure, v):
 class Supports:
     """Dirichlet conditions: supports, plane strain, and under displacement control the driven
     boundary, whose prescribed values :meth:`move` sets. Components are the scene's own axes,
-    which are those of the displacement dofs also in a rotated frame (``disc.basis``). Where
-    the driven boundary meets a support, the dofs the support holds stay held: the driven
-    boundary moves its other dofs."""
+    which are those of the displacement dofs also in a rotated frame (``disc.basis``); a
+    two-dimensional mesh has no y dofs (``disc.component``). Where the driven boundary meets
+    a support, the dofs the support holds stay held: the driven boundary moves its other
+    dofs."""
 
     def __init__(self, scene, tagged, disc):
         mesh, V = disc.mesh, disc.displacement_space
@@ -96,13 +102,16 @@ class Supports:
         located = []        # (dofs, component, coefficient)
         constraints = self._constraints(scene)
         for boundary, axes in constraints.items():
-            for i, coefficient in axes.items():
+            for axis, coefficient in axes.items():
+                i = disc.component(axis)
+                if i is None:
+                    continue
                 dofs = fem.locate_dofs_topological(V.sub(i), tdim - 1, facets(tagged, boundary))
                 located.append((dofs, i, coefficient))
         #: The dofs held at zero (every component: a dof index is one component's).
         self.held = np.unique(np.concatenate(
             [np.empty(0, np.int32)] + [dofs for dofs, _, coefficient in located if coefficient == 0.0]))
-        #: Per component, the facet groups that hold it at zero.
+        #: Per scene axis, the facet groups that hold it at zero.
         self.holding = tuple(tuple(b for b, axes in constraints.items() if axes.get(i) == 0.0)
                              for i in range(3))
         for dofs, i, coefficient in located:
@@ -111,7 +120,7 @@ class Supports:
                 self._moving.append((value, coefficient))
                 dofs = np.setdiff1d(dofs, self.held).astype(np.int32)
             self.bcs.append(fem.dirichletbc(value, dofs, V.sub(i)))
-        if scene.analysis.plane_strain:   # the dofs of every cell
+        if scene.analysis.plane_strain and not disc.planar:   # the dofs of every cell
             cells = mesh.topology.index_map(tdim)
             all_cells = np.arange(cells.size_local + cells.num_ghosts, dtype=np.int32)
             dofs = fem.locate_dofs_topological(V.sub(1), tdim, all_cells)

@@ -170,7 +170,8 @@ class Tool(Params):
 @dataclasses.dataclass(frozen=True)
 class Analysis(Params):
     element: Element = param(Element.HEX8, doc="hex8, hex8-reduced (one point per cell), hex8-bbar, hex27 or "
-                                              "hex27-bbar (mean dilatation)")
+                                              "hex27-bbar (mean dilatation); on a 2D mesh quad4, "
+                                              "quad4-reduced, quad4-bbar, quad9 or quad9-bbar")
     plane_strain: bool = param(False, doc="hold the y displacement at zero everywhere (x-z plane)")
     large_deformation: bool = param(False, doc="updated Lagrangian with an objective stress update "
                                                "(geometric stiffness, moving mesh)")
@@ -372,6 +373,7 @@ def _parse(raw, path):
         _choice(name, where, boundary_groups, f"{source} has no such boundary; its boundaries")
 
     analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
+    _check_dimension(builder.dimension(mesh), analysis, supports, tractions, loading, tool)
     _check_held(supports, loading, analysis, tool)
     headline = {}
     unread, driven = ((BOUNDARY_HEADLINES, "a tool") if loading.boundary == TOOL
@@ -398,6 +400,33 @@ def _parse(raw, path):
                  analysis=analysis, solver=from_table(Solver, raw.get("solver", {}), "solver"),
                  output=output,
                  headline=headline, tool=tool, tractions=tractions, geostatic=geostatic)
+
+
+def _check_dimension(dimension, analysis, supports, tractions, loading, tool):
+    """The element fits the mesh's cells; a two-dimensional mesh is a plane-strain x-z plane:
+    nothing acts along y, and no tool or frame rotation (both need three dimensions)."""
+    element = analysis.element
+    if element.dimension != dimension:
+        cells = "hexahedra" if dimension == 3 else "quadrilaterals (mesh.dimension = 2)"
+        raise InputError(f"analysis.element = {element.value!r} is not an element of the mesh's "
+                         f"{cells}: use {element.on(dimension).value!r}")
+    if dimension == 3:
+        return
+    where = "mesh.dimension = 2 (plane strain in the x-z plane)"
+    if not analysis.plane_strain:
+        raise InputError(f"analysis.plane_strain: {where} needs it true")
+    for i, support in enumerate(supports):
+        if "y" in support.fix:
+            raise InputError(f"supports[{i}].fix: y is not a displacement of {where}; "
+                             "plane strain holds it")
+    along_y = [(f"tractions[{i}].direction", t.direction) for i, t in enumerate(tractions)]
+    for key, direction in along_y + [("loading.direction", loading.direction)]:
+        if direction.axis == 1:
+            raise InputError(f"{key} = {direction.value!r}: {where} has no y direction")
+    if tool is not None:
+        raise InputError(f"tool: a rigid tool needs a three-dimensional mesh, not {where}")
+    if any(analysis.frame_rotation):
+        raise InputError(f"analysis.frame_rotation: {where} cannot be turned out of its plane")
 
 
 def _check_held(supports, loading, analysis, tool):

@@ -18,21 +18,25 @@ import numpy as np
 from petsc4py import PETSc
 
 
+def _rigid_motions(x):
+    """The rigid-body motions at the points x (n, d): d translations, then the rotations
+    (about each axis in 3D, in the plane in 2D), each (n, d)."""
+    d = x.shape[1]
+    translations = [np.tile(np.eye(d)[k], (len(x), 1)) for k in range(d)]
+    if d == 2:
+        return translations + [np.column_stack([-x[:, 1], x[:, 0]])]
+    return translations + [np.cross(np.eye(3)[k], x) for k in range(3)]   # e_k x x
+
+
 def rigid_body_modes(template, coordinates):
-    """The six rigid-body modes (three translations, three rotations) at the nodes with
-    ``coordinates`` (n_owned, 3), as vectors laid out like ``template`` (three
-    components per node, node-major), orthonormalised; a near-nullspace for GAMG."""
-    x = coordinates
+    """The rigid-body modes (six in 3D, three in 2D) at the nodes with ``coordinates``
+    (n_owned, d), as vectors laid out like ``template`` (d components per node,
+    node-major), orthonormalised; a near-nullspace for GAMG."""
     modes = []
-    for k in range(6):
-        values = np.zeros((len(x), 3))
-        if k < 3:
-            values[:, k] = 1.0
-        else:   # rotation about axis k - 3: e_k x x
-            values[:] = np.cross(np.eye(3)[k - 3], x)
+    for values in _rigid_motions(coordinates):
         vector = template.duplicate()
         vector.array[:] = values.ravel()
-        for previous in modes:   # Gram-Schmidt (six global dot products each)
+        for previous in modes:   # Gram-Schmidt (a global dot product each)
             vector.axpy(-vector.dot(previous), previous)
         vector.scale(1.0 / vector.norm())
         modes.append(vector)
@@ -70,22 +74,23 @@ class CellCondensation:
         space, mesh = disc.space, disc.mesh
         imap = space.dofmap.index_map
         to_global = imap.local_to_global
-        cells = mesh.topology.index_map(3)
+        dim = disc.dimension
+        cells = mesh.topology.index_map(mesh.topology.dim)
         n_local = cells.size_local + cells.num_ghosts
-        # the three components of each node, and the node's coordinates, cell by cell
+        # the components of each node, and the node's coordinates, cell by cell
         # (no space.sub(0).collapse(): its dof reordering takes minutes on 10^6 dofs)
-        triplets = np.stack([space.sub(0).sub(i).dofmap.list.array.reshape(n_local, -1)
-                             for i in range(3)], axis=-1).reshape(-1, 3)
+        components = np.stack([space.sub(0).sub(i).dofmap.list.array.reshape(n_local, -1)
+                               for i in range(dim)], axis=-1).reshape(-1, dim)
         nodes = mesh.geometry.dofmap.array.reshape(n_local, -1).ravel()
-        _, first = np.unique(triplets[:, 0], return_index=True)
-        first = first[triplets[first, 0] < imap.size_local]       # owned nodes
-        u_local = triplets[first].ravel().astype(np.int32)
+        _, first = np.unique(components[:, 0], return_index=True)
+        first = first[components[first, 0] < imap.size_local]       # owned nodes
+        u_local = components[first].ravel().astype(np.int32)
         self._coordinates = disc.in_dof_axes(mesh.geometry.x[nodes[first]])
         n_cells = cells.size_local
         cell_fields = np.stack([space.sub(i).dofmap.list.array[:n_cells] for i in (1, 2)], axis=1)
         comm = space.mesh.comm
         self.is_u = PETSc.IS().createGeneral(to_global(u_local).astype(PETSc.IntType), comm=comm)
-        self.is_u.setBlockSize(3)
+        self.is_u.setBlockSize(dim)
         self.is_c = PETSc.IS().createGeneral(
             to_global(cell_fields.ravel().astype(np.int32)).astype(PETSc.IntType), comm=comm)
         self._n_cells = n_cells

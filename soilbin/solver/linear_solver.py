@@ -12,7 +12,7 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
   cannot be symmetric, is solved by LU instead (``stats["unsymmetric_solves"]``
   counts them).
 * ``amg``: GMRES preconditioned by PETSc's smoothed aggregation (GAMG) with
-  the six rigid-body modes as near-nullspace. ``hex8-bbar`` systems are
+  the rigid-body modes as near-nullspace. ``hex8-bbar`` systems are
   condensed first (``condensation.CellCondensation``: the cell dilatation
   and pressure eliminated exactly), since AMG needs a displacement system.
 

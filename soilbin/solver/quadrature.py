@@ -13,7 +13,6 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from ..elements import CELL
 from ..errors import ReturnMapError
 from ..tensors import from_mandel, to_mandel
 from .linear_solver import all_symmetric
@@ -43,7 +42,7 @@ class MaterialPoints:
         ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3)."""
         mesh = disc.mesh
         degree = disc.element.quadrature_degree
-        points, _ = basix.make_quadrature(basix.cell.string_to_type(CELL), degree)
+        points, _ = basix.make_quadrature(basix.cell.string_to_type(disc.element.cell), degree)
         self.points_per_cell = len(points)
         imap = mesh.topology.index_map(mesh.topology.dim)
         self._cells = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)
@@ -69,7 +68,7 @@ class MaterialPoints:
                       for name, cells in region_cells.items()}
         stress0 = None
         if initial_stress is not None:
-            x = self.evaluate(self.expression(ufl.SpatialCoordinate(mesh)))
+            x = self.evaluate(self.expression(disc.coordinates()))
             stress0 = initial_stress(x)
         self.committed = {name: self.models[name].initial_state(
                               len(idx), None if stress0 is None else stress0[idx])
