@@ -16,9 +16,10 @@ Mapping = Callable[[float, float, float], tuple[float, float, float]]
 
 def block_grid(xs: Sequence[Segment], ys: Sequence[Segment], zs: Sequence[Segment],
                keep: Callable[[int, int, int], bool] = lambda i, j, k: True,
-               mapping: Mapping = lambda x, y, z: (x, y, z)) -> None:
+               mapping: Mapping = lambda x, y, z: (x, y, z), dimension: int = 3) -> None:
     """Transfinite hexahedral blocks: the products of the x, y and z segments (each sequence
-    contiguous and ascending) whose indices (i, j, k) ``keep`` accepts.
+    contiguous and ascending) whose indices (i, j, k) ``keep`` accepts; with ``dimension``
+    = 2 only each block's face at its low y, a transfinite quadrilateral surface.
 
     ``mapping`` moves the block corners; the blocks' faces must stay planar
     (e.g. a map bilinear in each block). Synchronizes the model.
@@ -56,20 +57,25 @@ def block_grid(xs: Sequence[Segment], ys: Sequence[Segment], zs: Sequence[Segmen
         return faces[corner, normal]
 
     for block in blocks:
+        if dimension == 2:
+            face(block, 1)
+            continue
         sides = [face(c, axis) for axis in range(3) for c in (block, shift(block, axis))]
         volume = geo.addVolume([geo.addSurfaceLoop(sides)])
         geo.mesh.setTransfiniteVolume(volume)
     geo.synchronize()
 
 
-def extruded_grid(xs: Sequence[Segment], zs: Sequence[Segment], thickness: float, layers: int) -> None:
-    """Blocks of transfinite quads on the x-z plane, extruded to y = thickness in hexahedra.
+def extruded_grid(xs: Sequence[Segment], zs: Sequence[Segment], thickness: float, layers: int,
+                  dimension: int = 3) -> None:
+    """Blocks of transfinite quads on the x-z plane, extruded to y = thickness in hexahedra
+    (``dimension`` = 2: not extruded).
 
     The blocks are the products of the x segments ``xs`` and the z segments
     ``zs`` (each sequence contiguous and ascending); ``layers`` elements span
     the thickness. Synchronizes the model.
     """
-    block_grid(xs, [Segment(0.0, thickness, layers)], zs)
+    block_grid(xs, [Segment(0.0, thickness, layers)], zs, dimension=dimension)
 
 
 Limit = Union[None, float, tuple[float, float]]

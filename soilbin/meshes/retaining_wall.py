@@ -1,5 +1,6 @@
 """The retaining-wall builder's declaration: a plane-strain slab of soil behind a rigid wall
-(passive translation), one hex layer in y.
+(passive translation), one hex layer in y, or (``dimension = 2``) its quadrilaterals in the
+x-z plane.
 
 The soil fills x in [0, length], z in [-depth, 0] (z up, ground surface
 z = 0); the wall is x = 0 for z in [-wall_height, 0], and below its toe x = 0
@@ -15,7 +16,7 @@ from dataclasses import dataclass
 
 from ..errors import InputError
 from ..params import Params, param
-from .builder import Builder, check_cell_count, length_param, refine_param
+from .builder import Builder, check_cell_count, dimension_param, length_param, refine_param
 from .segments import Segment
 
 
@@ -29,6 +30,7 @@ class RetainingWallParams(Params):
     growth: float = param(1.0, lo=1.0, hi=2.0, doc="ratio of neighbouring element lengths away from the toe")
     refine: int = refine_param("splits every element into refine^2 in x-z "
                                "(nested; refine = 2 gives 4x the cells)")
+    dimension: int = dimension_param()
 
     def __post_init__(self):
         super().__post_init__()
@@ -39,7 +41,7 @@ class RetainingWallParams(Params):
 
     @property
     def cells(self) -> int:
-        """Number of hexahedra (one layer)."""
+        """Number of cells (hexahedra of the one layer, or quadrilaterals)."""
         xs, zs = self.segments()
         return sum(s.n for s in xs) * sum(s.n for s in zs)
 
@@ -55,7 +57,7 @@ class RetainingWallParams(Params):
 
 RETAINING_WALL = Builder(
     name="retaining_wall", params=RetainingWallParams,
-    summary="plane-strain slab (one hex layer in y) behind a rigid wall x = 0 down to its toe, graded "
-            "toward its toe",
+    summary="plane-strain slab (one hex layer in y, or 2D) behind a rigid wall x = 0 down to its "
+            "toe, graded toward its toe",
     regions=("soil",), boundaries=("wall", "below_wall", "surface", "far", "base", "front", "back"),
-    contact=(), geometry="retaining_wall_geometry")
+    contact=(), geometry="retaining_wall_geometry", slab_faces=("front", "back"))

@@ -4,15 +4,15 @@ from .retaining_wall import RetainingWallParams
 
 
 def geometry(p: RetainingWallParams):
-    toe = -p.wall_height
-    extruded_grid(*p.segments(), p.thickness, 1)
+    toe, facet = -p.wall_height, p.dimension - 1
+    extruded_grid(*p.segments(), p.thickness, 1, p.dimension)
     boundaries = {
-        "wall": entities_within(2, x=0.0, z=(toe, 0.0)),
-        "below_wall": entities_within(2, x=0.0, z=(-p.depth, toe)),
-        "surface": entities_within(2, z=0.0),
-        "far": entities_within(2, x=p.length),
-        "base": entities_within(2, z=-p.depth),
-        "front": entities_within(2, y=0.0),
-        "back": entities_within(2, y=p.thickness),
+        "wall": entities_within(facet, x=0.0, z=(toe, 0.0)),
+        "below_wall": entities_within(facet, x=0.0, z=(-p.depth, toe)),
+        "surface": entities_within(facet, z=0.0),
+        "far": entities_within(facet, x=p.length),
+        "base": entities_within(facet, z=-p.depth),
     }
-    return {"soil": entities_within(3)}, boundaries
+    if p.dimension == 3:
+        boundaries.update(front=entities_within(2, y=0.0), back=entities_within(2, y=p.thickness))
+    return {"soil": entities_within(p.dimension)}, boundaries
