@@ -175,7 +175,8 @@ def main():
     parser.add_argument("--only", nargs="+", metavar="TEXT",
                         help="only the cases whose name contains one of these")
     parser.add_argument("--update", action="store_true",
-                        help="keep the other cases of the results file in --out, replace these")
+                        help="keep the other cases of the results file in --out (those still "
+                             "among the cases), replace these")
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "benchmark")
     parser.add_argument("--case", nargs="+", metavar=("SCENE", "OVERRIDE"),
                         help="run one case in this process and print its JSON")
@@ -191,9 +192,10 @@ def main():
         r = results[-1]
         print(f"{name}: {r['dofs']} dofs, {r['iterations']} ({r['failed']}) Newton, "
               f"{r['solve_s']:.2f} s solve, {r['value']}", file=sys.stderr, flush=True)
-    if args.update:
+    if args.update:   # the file's other cases that are still cases, and these
         fresh = {r["case"]: r for r in results}
-        kept = json.loads((args.out / "results.json").read_text())
+        known = {name for name, _, _ in cases(quick=False)} | {name for name, _, _ in cases(quick=True)}
+        kept = [r for r in json.loads((args.out / "results.json").read_text()) if r["case"] in known]
         results = [fresh.pop(r["case"], r) for r in kept] + list(fresh.values())
     text = markdown(results, " ".join(["OMP_NUM_THREADS=1 python", *sys.argv]))
     args.out.mkdir(parents=True, exist_ok=True)
