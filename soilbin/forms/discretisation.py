@@ -28,11 +28,6 @@ from dolfinx import fem
 from ..elements import PLANE_AXES, Element, embedding
 
 
-def _embedded(a):
-    """A UFL vector of the mesh's two axes as the scene's three (0 along y)."""
-    return ufl.as_vector([a[0], 0, a[1]])
-
-
 @dataclasses.dataclass(frozen=True)
 class Discretisation:
     element: Element
@@ -78,6 +73,11 @@ class Discretisation:
             return axis
         return PLANE_AXES.index(axis) if axis in PLANE_AXES else None
 
+    def embed(self, a):
+        """A UFL vector along the mesh's axes in the scene's three components (0 along y in
+        plane strain)."""
+        return ufl.as_vector([a[0], 0, a[1]]) if self.planar else a
+
     def grad(self, a):
         """The 3 x 3 gradient of a UFL 3-vector field (its y column zero in plane strain)."""
         g = ufl.grad(a)
@@ -90,13 +90,11 @@ class Discretisation:
 
     def normal(self):
         """The outward unit normal of the facets, in the scene's three components."""
-        n = ufl.FacetNormal(self.mesh)
-        return _embedded(n) if self.planar else n
+        return self.embed(ufl.FacetNormal(self.mesh))
 
     def coordinates(self):
         """The position, in the scene's three components (UFL)."""
-        x = ufl.SpatialCoordinate(self.mesh)
-        return _embedded(x) if self.planar else x
+        return self.embed(ufl.SpatialCoordinate(self.mesh))
 
     def measure(self, **kwargs):
         """The cell measure whose rule matches the quadrature spaces."""
@@ -115,7 +113,7 @@ class Discretisation:
         of ``space``."""
         u = ufl.split(w)[0] if self.element.mixed else w
         if self.planar:
-            return _embedded(u)
+            return self.embed(u)
         return u if self.basis is None else ufl.dot(ufl.as_matrix(self.basis), u)
 
     def in_mesh_axes(self, values):

@@ -3,11 +3,12 @@
 A builder declares, in one place, its parameter record, the cell groups
 (regions) and facet groups (boundaries) of every mesh it makes, which of the
 boundaries are the contact surface of a rigid tool, and the module whose
-``geometry(params)`` builds the gmsh model. A plane-strain builder may also
-make a two-dimensional mesh in the x-z plane (its parameter ``dimension``):
-then the faces of the slab in y (``slab_faces``) are not among its boundaries. That module is imported only
+``geometry(params)`` builds the gmsh model. That module is imported only
 when a mesh is built, so a scene can be read without gmsh; building checks
-that the geometry made exactly the declared groups, none of them empty.
+that the geometry made exactly the declared groups, none of them empty. A
+plane-strain builder may also make a two-dimensional mesh in the x-z plane
+(its parameter ``dimension``): then the faces of the slab in y
+(``slab_faces``) are not among its boundaries.
 """
 import importlib
 from dataclasses import dataclass
@@ -83,8 +84,8 @@ def length_param(default, doc):
 
 
 def dimension_param():
-    return param(3, lo=2, hi=3, doc="3: a slab of one hex layer in y; 2: quadrilaterals in the "
-                                    "x-z plane (plane strain solved in 2D, a third of the unknowns)")
+    return param(3, lo=2, hi=3, doc="3: a slab of one hex layer in y; 2: quadrilaterals in the x-z "
+                                    "plane (plane strain solved in 2D, a third of the unknowns)")
 
 
 def refine_param(doc):

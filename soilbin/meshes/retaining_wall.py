@@ -25,7 +25,7 @@ class RetainingWallParams(Params):
     wall_height: float = length_param(10.0, "height H of the wall, down from the surface")
     length: float = length_param(30.0, "extent of the soil in x, from the wall")
     depth: float = length_param(15.0, "depth of the soil (> wall_height)")
-    thickness: float = length_param(1.0, "thickness of the slab in y (one element)")
+    thickness: float = length_param(1.0, "thickness of the slab in y (one element; dimension = 3)")
     element_size: float = length_param(1.0, "largest length of the elements at the wall's toe")
     growth: float = param(1.0, lo=1.0, hi=2.0, doc="ratio of neighbouring element lengths away from the toe")
     refine: int = refine_param("splits every element into refine^2 in x-z "

@@ -32,7 +32,7 @@ class StripFootingParams(Params):
     footing_width: float = length_param(2.0, "full width B of the strip footing; the half model carries B/2")
     width: float = length_param(10.0, "extent of the half model in x, from the symmetry plane (> B/2)")
     depth: float = length_param(10.0, "depth of soil below the ground surface")
-    thickness: float = length_param(1.0, "thickness of the slab in y (one element)")
+    thickness: float = length_param(1.0, "thickness of the slab in y (one element; dimension = 3)")
     edge_size: float = length_param(0.02, "element size at the footing edge")
     far_size: float = length_param(1.0, "largest element size, far from the footing")
     size_growth: float = param(0.15, lo=0.01, hi=2.0,

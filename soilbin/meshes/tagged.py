@@ -108,7 +108,8 @@ def _as_declared(name: str, kind: str, declared: tuple[str, ...], made: Groups) 
     return {group: made[group] for group in declared}
 
 
-def _mesh_cells(regions: Groups, boundaries: Groups, dimension: int) -> tuple[dict[str, int], dict[str, int]]:
+def _mesh_cells(regions: Groups, boundaries: Groups,
+                dimension: int) -> tuple[dict[str, int], dict[str, int]]:
     """Add the physical groups, mesh, and check the cells (hexahedra, or quadrilaterals)."""
     unassigned = {t for _, t in gmsh.model.getEntities(dimension)} - set().union(*regions.values())
     if unassigned:

@@ -157,10 +157,10 @@ class SoilProblem:
     def nodal_displacement(self):
         """(initial coordinates, total displacement), each (n, 3) in the scene's axes, at the
         owned mesh nodes."""
-        u = self.displacement()
+        u, dim = self.displacement(), self.disc.dimension
         owned = u.function_space.dofmap.index_map.size_local
-        displacement = self.disc.to_world(u.x.array.reshape(-1, self.disc.dimension)[:owned])
-        x = self.disc.to_world(u.function_space.tabulate_dof_coordinates()[:owned, :self.disc.dimension])
+        displacement = self.disc.to_world(u.x.array.reshape(-1, dim)[:owned])
+        x = self.disc.to_world(u.function_space.tabulate_dof_coordinates()[:owned, :dim])
         return x - displacement * self.moves_mesh, displacement
 
     def output_fields(self, names):

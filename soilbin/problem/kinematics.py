@@ -111,8 +111,7 @@ class UpdatedLagrangian:
 
     def total_displacement(self):
         """The displacement from the initial configuration (UFL, three components)."""
-        total = self._motion.total
-        return ufl.as_vector([total[0], 0, total[1]]) if self._disc.planar else total
+        return self._disc.embed(self._motion.total)
 
     def volume_change(self):
         """dV/dV0 − 1 = 1/det(I − ∇u) − 1, with u the total displacement on the current mesh."""
