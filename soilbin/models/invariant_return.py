@@ -154,14 +154,46 @@ class Response:
 
 
 def invariant_tangent(p_e, p_J, J_e, J_J, ratio, n, G):
-    """The consistent tangent of the module doc from the (p, J) sensitivities."""
+    """The consistent tangent of the module doc from the (p, J) sensitivities, (m, 6, 6).
+
+    Built entry by entry on rows of m contiguous values (a (6, 6, m) array: NumPy is
+    slow on the short inner loops of (m, 6, 6) blocks) and returned as a
+    (m, 6, 6) view of them; each entry takes the terms in the order of the module doc."""
+    m = len(ratio)
     two_g_ratio = 2.0 * G * ratio
-    C = two_g_ratio[:, None, None] * P_DEV
-    C[:, :3, :3] += p_e[:, None, None]
-    C[:, :3, :] -= (SQRT2 * G * p_J)[:, None, None] * n[:, None, :]      # I (x) n
-    C[:, :, :3] -= (SQRT2 * J_e)[:, None, None] * n[:, :, None]          # n (x) I
-    C += ((2.0 * G * J_J - two_g_ratio)[:, None] * n)[:, :, None] * n[:, None, :]
-    return C
+    I_n, n_I = SQRT2 * G * p_J, SQRT2 * J_e      # I (x) n, n (x) I
+    n_n = 2.0 * G * J_J - two_g_ratio            # n (x) n
+    n = np.ascontiguousarray(n.T)
+    C = np.empty((6, 6, m))
+    for i in range(6):
+        n_n_i = n_n * n[i]
+        for j in range(6):
+            c = np.multiply(two_g_ratio, P_DEV[i, j], out=C[i, j])
+            if i < 3 and j < 3:
+                c += p_e
+            if i < 3:
+                c -= I_n * n[j]
+            if j < 3:
+                c -= n_I * n[i]
+            c += n_n_i * n[j]
+    return C.reshape(36, m).T.reshape(m, 6, 6)
+
+
+def _max_abs(r):
+    """max |r_i| of each row of r (m, k) (NaN where one is NaN), by columns: NumPy
+    reduces the short rows slowly."""
+    norm = np.abs(r[:, 0])
+    for i in range(1, r.shape[1]):
+        np.maximum(norm, np.abs(r[:, i]), out=norm)
+    return norm
+
+
+def _merit(r):
+    """|r|^2 / 2 of each row of r (m, k), summed by columns in order (as np.sum does)."""
+    total = r[:, 0] * r[:, 0]
+    for i in range(1, r.shape[1]):
+        total += r[:, i] * r[:, i]
+    return 0.5 * total
 
 
 def _solve(jac, rhs):
@@ -186,57 +218,71 @@ def newton(evaluate, admissible, x0, tol=NEWTON_TOL):
     the residual. Returns (x, Jacobian at x, converged).
     """
     x = np.array(x0, dtype=float)
-    m = len(x)
+    m, k = x.shape
     converged = np.zeros(m, dtype=bool)
+    # The residual and Jacobian where each point converged, for the polish.
+    r_at, jac_at = np.empty((m, k)), np.empty((m, k, k))
     idx = np.arange(m)
     r, jac = evaluate(x, idx)
     for _ in range(MAX_ITERATIONS):
-        norm = np.abs(r).max(axis=1)
+        norm = _max_abs(r)
         done = norm <= tol
-        converged[idx[done]] = True
-        idx, r, jac, norm = idx[~done], r[~done], jac[~done], norm[~done]
+        if done.any():
+            converged[idx[done]] = True
+            r_at[idx[done]], jac_at[idx[done]] = r[done], jac[done]
+            idx, r, jac, norm = idx[~done], r[~done], jac[~done], norm[~done]
         if idx.size == 0:
             break
-        dx = -_solve(jac, r)
-        merit = 0.5 * np.sum(r * r, axis=1)
-        step = np.ones(len(idx))
-        todo = np.arange(len(idx))
-        moved = np.zeros(len(idx), dtype=bool)
-        new_x, new_r, new_jac = x[idx].copy(), r.copy(), jac.copy()
-        for _ in range(MAX_HALVINGS):
-            xt = x[idx[todo]] + step[todo, None] * dx[todo]
-            rt, jt = evaluate(xt, idx[todo])
-            mt = 0.5 * np.sum(rt * rt, axis=1)
-            good = (admissible(xt, idx[todo]) & np.isfinite(mt) & np.isfinite(jt).all(axis=(1, 2))
-                    & (mt <= (1.0 - 1e-4 * step[todo]) * merit[todo]))
-            g = todo[good]
-            new_x[g], new_r[g], new_jac[g] = xt[good], rt[good], jt[good]
-            moved[g] = True
-            todo = todo[~good]
-            if todo.size == 0:
-                break
-            step[todo] *= 0.5
-        x[idx] = new_x
+        moved, x_new, r_new, jac_new = _line_search(evaluate, admissible, x[idx],
+                                                    -_solve(jac, r), r, idx)
         # A stalled line search at the rounding floor counts as converged.
-        stalled = ~moved
-        converged[idx[stalled & (norm <= STALL_TOL)]] = True
-        keep = moved
-        idx, r, jac = idx[keep], new_r[keep], new_jac[keep]
+        stalled = np.flatnonzero(~moved & (norm <= STALL_TOL))
+        converged[idx[stalled]] = True
+        r_at[idx[stalled]], jac_at[idx[stalled]] = r[stalled], jac[stalled]
+        idx, r, jac = idx[moved], r_new, jac_new
+        x[idx] = x_new
     # Polish the converged points with one more full step.
     idx = np.flatnonzero(converged)
+    full_jac = np.zeros((m, k, k))
     if idx.size:
-        r, jac = evaluate(x[idx], idx)
+        r, jac = r_at[idx], jac_at[idx]
         xt = x[idx] - _solve(jac, r)
         rt, jt = evaluate(xt, idx)
-        better = (admissible(xt, idx) & np.isfinite(rt).all(axis=1)
-                  & (np.abs(rt).max(axis=1) <= np.abs(r).max(axis=1)))
+        norm_t = _max_abs(rt)
+        better = admissible(xt, idx) & np.isfinite(norm_t) & (norm_t <= _max_abs(r))
         x[idx[better]] = xt[better]
         jac[better] = jt[better]
-        full_jac = np.zeros((m,) + jac.shape[1:])
         full_jac[idx] = jac
-    else:
-        full_jac = np.zeros((m, x.shape[1], x.shape[1]))
     return x, full_jac, converged
+
+
+def _line_search(evaluate, admissible, x, dx, r, idx):
+    """The Newton step dx from x (the systems ``idx``, residuals r there), halved until
+    the merit |r|^2 / 2 decreases (Armijo) at an admissible point. Returns (moved,
+    x, r, Jacobian), the last three at the points that moved."""
+    merit = _merit(r)
+    step = np.ones(len(idx))
+    todo = np.arange(len(idx))
+    moved = np.zeros(len(idx), dtype=bool)
+    for halving in range(MAX_HALVINGS):
+        xt = x[todo] + step[todo, None] * dx[todo]
+        rt, jt = evaluate(xt, idx[todo])
+        mt = _merit(rt)
+        good = (admissible(xt, idx[todo]) & np.isfinite(mt) & np.isfinite(jt).all(axis=(1, 2))
+                & (mt <= (1.0 - 1e-4 * step[todo]) * merit[todo]))
+        if halving == 0:        # todo is every point: the full step's values in place
+            new_x, new_r, new_jac = xt, rt, jt
+        else:
+            g = todo[good]
+            new_x[g], new_r[g], new_jac[g] = xt[good], rt[good], jt[good]
+        moved[todo[good]] = True
+        todo = todo[~good]
+        if todo.size == 0:
+            break
+        step[todo] *= 0.5
+    if moved.all():
+        return moved, new_x, new_r, new_jac
+    return moved, new_x[moved], new_r[moved], new_jac[moved]
 
 
 def scalar_root(fun, lo, hi, x0=None):
@@ -325,22 +371,30 @@ class LocalProblem:
             xi, J, dg, h = x.T
             p, dp = self.pressure(xi)
             s = self.surface(p, J, h, k)
-            rh, rh_h, rh_c = self.hardening(h, dg * s.f_p, k)
+            dg_p = dg * s.f_p
+            rh, rh_h, rh_c = self.hardening(h, dg_p, k)
             c = bulk.compliance(p)
-            r = np.stack([bulk.strain(p, p_n[k]) - de_in[kk] + dg * s.f_p,
-                          (J - J_in[kk]) / G + dg * s.f_J,
-                          s.f,
-                          rh], axis=1)
-            jac = np.empty((len(k), 4, 4))
-            jac[:, 0] = np.stack([(c + dg * s.f_pp) * dp, dg * s.f_pJ, s.f_p, dg * s.f_ph], axis=1)
-            jac[:, 1] = np.stack([dg * s.f_pJ * dp, 1.0 / G + dg * s.f_JJ, s.f_J, dg * s.f_Jh],
-                                 axis=1)
-            jac[:, 2] = np.stack([s.f_p * dp, s.f_J, np.zeros_like(s.f_p), s.f_h], axis=1)
-            jac[:, 3] = np.stack([rh_c * dg * s.f_pp * dp, rh_c * dg * s.f_pJ, rh_c * s.f_p,
-                                  rh_h + rh_c * dg * s.f_ph], axis=1)
-            scale = np.stack([self.strain_row[k], self.strain_row[k], 1.0 / s.scale,
-                              self.h_row[k]], axis=1)
-            return r * scale, jac * scale[:, :, None]
+            dg_pp, dg_pJ, dg_ph = dg * s.f_pp, dg * s.f_pJ, dg * s.f_ph
+            r, jac = np.empty((len(k), 4)), np.empty((len(k), 4, 4))
+            r[:, 0] = bulk.strain(p, p_n[k]) - de_in[kk] + dg_p
+            r[:, 1] = (J - J_in[kk]) / G + dg * s.f_J
+            r[:, 2] = s.f
+            r[:, 3] = rh
+            jac[:, 0, 0], jac[:, 0, 1], jac[:, 0, 2], jac[:, 0, 3] = (
+                (c + dg_pp) * dp, dg_pJ, s.f_p, dg_ph)
+            jac[:, 1, 0], jac[:, 1, 1], jac[:, 1, 2], jac[:, 1, 3] = (
+                dg_pJ * dp, 1.0 / G + dg * s.f_JJ, s.f_J, dg * s.f_Jh)
+            jac[:, 2, 0], jac[:, 2, 1], jac[:, 2, 2], jac[:, 2, 3] = s.f_p * dp, s.f_J, 0.0, s.f_h
+            jac[:, 3, 0], jac[:, 3, 1], jac[:, 3, 2], jac[:, 3, 3] = (
+                rh_c * dg * s.f_pp * dp, rh_c * dg * s.f_pJ, rh_c * s.f_p,
+                rh_h + rh_c * dg * s.f_ph)
+            scale = np.empty((len(k), 4))
+            scale[:, 0] = scale[:, 1] = self.strain_row[k]
+            scale[:, 2] = 1.0 / s.scale
+            scale[:, 3] = self.h_row[k]
+            r *= scale
+            jac *= scale[:, :, None]
+            return r, jac
 
         def ok(x, kk):
             xi, J, _, h = x.T
