@@ -154,89 +154,142 @@ class Response:
 
 
 def invariant_tangent(p_e, p_J, J_e, J_J, ratio, n, G):
-    """The consistent tangent of the module doc from the (p, J) sensitivities."""
+    """The consistent tangent of the module doc from the (p, J) sensitivities, (m, 6, 6).
+
+    Built entry by entry on rows of m contiguous values (a (6, 6, m) array: NumPy is
+    slow on the short inner loops of (m, 6, 6) blocks) and returned as a
+    (m, 6, 6) view of them; each entry takes the terms in the order of the module doc."""
+    m = len(ratio)
     two_g_ratio = 2.0 * G * ratio
-    C = two_g_ratio[:, None, None] * P_DEV
-    C[:, :3, :3] += p_e[:, None, None]
-    C[:, :3, :] -= (SQRT2 * G * p_J)[:, None, None] * n[:, None, :]      # I (x) n
-    C[:, :, :3] -= (SQRT2 * J_e)[:, None, None] * n[:, :, None]          # n (x) I
-    C += ((2.0 * G * J_J - two_g_ratio)[:, None] * n)[:, :, None] * n[:, None, :]
-    return C
+    I_n, n_I = SQRT2 * G * p_J, SQRT2 * J_e      # I (x) n, n (x) I
+    n_n = 2.0 * G * J_J - two_g_ratio            # n (x) n
+    n = np.ascontiguousarray(n.T)
+    C = np.empty((6, 6, m))
+    for i in range(6):
+        n_n_i = n_n * n[i]
+        for j in range(6):
+            c = np.multiply(two_g_ratio, P_DEV[i, j], out=C[i, j])
+            if i < 3 and j < 3:
+                c += p_e
+            if i < 3:
+                c -= I_n * n[j]
+            if j < 3:
+                c -= n_I * n[i]
+            c += n_n_i * n[j]
+    return C.reshape(36, m).T.reshape(m, 6, 6)
 
 
 def _solve(jac, rhs):
-    """Batched solve jac x = rhs, rhs (m, k) or (m, k, c); pseudo-inverse if singular."""
+    """Batched solve jac x = rhs of the systems along the last axis: jac (k, k, m), rhs
+    (k, m) or (k, c, m). Gaussian elimination with partial pivoting on rows of m
+    values (NumPy's batched LAPACK costs ~0.5 us a 4x4 system); the pseudo-inverse
+    everywhere if a matrix is singular (a zero pivot)."""
+    k = len(jac)
     vector = rhs.ndim == 2
-    b = rhs[..., None] if vector else rhs
-    try:
-        x = np.linalg.solve(jac, b)
-    except np.linalg.LinAlgError:
-        x = np.linalg.pinv(jac) @ b
-    return x[..., 0] if vector else x
+    a = np.concatenate([jac, rhs[:, None] if vector else rhs], axis=1)   # [jac | rhs]
+    for c in range(k):
+        for r in range(c + 1, k):      # the largest |a[:, c]| of rows c.. to row c
+            swap = np.flatnonzero(np.abs(a[r, c]) > np.abs(a[c, c]))
+            if swap.size:
+                top, row = a[c, c:], a[r, c:]
+                top[:, swap], row[:, swap] = row[:, swap], top[:, swap]
+        if not a[c, c].all():
+            return _pinv_solve(jac, rhs)
+        for r in range(c + 1, k):
+            a[r, c + 1:] -= (a[r, c] / a[c, c]) * a[c, c + 1:]
+    x = a[:, k:]
+    for r in range(k - 1, -1, -1):
+        for j in range(r + 1, k):
+            x[r] -= a[r, j] * x[j]
+        x[r] /= a[r, r]
+    return x[:, 0] if vector else x
+
+
+def _pinv_solve(jac, rhs):
+    """:func:`_solve` by pseudo-inverses."""
+    vector = rhs.ndim == 2
+    b = (rhs[:, None] if vector else rhs).transpose(2, 0, 1)
+    x = (np.linalg.pinv(jac.transpose(2, 0, 1)) @ b).transpose(1, 2, 0)
+    return x[:, 0] if vector else x
 
 
 def newton(evaluate, admissible, x0, tol=NEWTON_TOL):
-    """Line-searched Newton for many small systems at once.
+    """Line-searched Newton for many small systems at once, one system a column:
+    NumPy is fast along the long rows of m values.
 
-    ``evaluate(x, idx)`` gives the scaled residuals (m, k) and Jacobians
-    (m, k, k) of the systems ``idx`` at ``x`` (m, k); ``admissible(x, idx)``
+    ``evaluate(x, idx)`` gives the scaled residuals (k, m) and Jacobians
+    (k, k, m) of the systems ``idx`` at ``x`` (k, m); ``admissible(x, idx)``
     (m,) says where an iterate may go. Each step is halved until the merit
     |r|^2 / 2 decreases (Armijo) at an admissible point. A converged point
     gets one more full step (to rounding accuracy) where it does not increase
     the residual. Returns (x, Jacobian at x, converged).
     """
-    x = np.array(x0, dtype=float)
-    m = len(x)
+    x = np.array(x0, dtype=float, order="C")
+    k, m = x.shape
     converged = np.zeros(m, dtype=bool)
+    # The residual and Jacobian where each point converged, for the polish.
+    r_at, jac_at = np.empty((k, m)), np.empty((k, k, m))
     idx = np.arange(m)
     r, jac = evaluate(x, idx)
     for _ in range(MAX_ITERATIONS):
-        norm = np.abs(r).max(axis=1)
+        norm = np.abs(r).max(axis=0)
         done = norm <= tol
-        converged[idx[done]] = True
-        idx, r, jac, norm = idx[~done], r[~done], jac[~done], norm[~done]
+        if done.any():
+            converged[idx[done]] = True
+            r_at[:, idx[done]], jac_at[..., idx[done]] = r[:, done], jac[..., done]
+            idx, r, jac, norm = idx[~done], r[:, ~done], jac[..., ~done], norm[~done]
         if idx.size == 0:
             break
-        dx = -_solve(jac, r)
-        merit = 0.5 * np.sum(r * r, axis=1)
-        step = np.ones(len(idx))
-        todo = np.arange(len(idx))
-        moved = np.zeros(len(idx), dtype=bool)
-        new_x, new_r, new_jac = x[idx].copy(), r.copy(), jac.copy()
-        for _ in range(MAX_HALVINGS):
-            xt = x[idx[todo]] + step[todo, None] * dx[todo]
-            rt, jt = evaluate(xt, idx[todo])
-            mt = 0.5 * np.sum(rt * rt, axis=1)
-            good = (admissible(xt, idx[todo]) & np.isfinite(mt) & np.isfinite(jt).all(axis=(1, 2))
-                    & (mt <= (1.0 - 1e-4 * step[todo]) * merit[todo]))
-            g = todo[good]
-            new_x[g], new_r[g], new_jac[g] = xt[good], rt[good], jt[good]
-            moved[g] = True
-            todo = todo[~good]
-            if todo.size == 0:
-                break
-            step[todo] *= 0.5
-        x[idx] = new_x
+        moved, x_new, r_new, jac_new = _line_search(evaluate, admissible, x[:, idx],
+                                                    -_solve(jac, r), r, idx)
         # A stalled line search at the rounding floor counts as converged.
-        stalled = ~moved
-        converged[idx[stalled & (norm <= STALL_TOL)]] = True
-        keep = moved
-        idx, r, jac = idx[keep], new_r[keep], new_jac[keep]
+        stalled = np.flatnonzero(~moved & (norm <= STALL_TOL))
+        converged[idx[stalled]] = True
+        r_at[:, idx[stalled]], jac_at[..., idx[stalled]] = r[:, stalled], jac[..., stalled]
+        idx, r, jac = idx[moved], r_new, jac_new
+        x[:, idx] = x_new
     # Polish the converged points with one more full step.
     idx = np.flatnonzero(converged)
+    full_jac = np.zeros((k, k, m))
     if idx.size:
-        r, jac = evaluate(x[idx], idx)
-        xt = x[idx] - _solve(jac, r)
+        r, jac = r_at[:, idx], jac_at[..., idx]
+        xt = x[:, idx] - _solve(jac, r)
         rt, jt = evaluate(xt, idx)
-        better = (admissible(xt, idx) & np.isfinite(rt).all(axis=1)
-                  & (np.abs(rt).max(axis=1) <= np.abs(r).max(axis=1)))
-        x[idx[better]] = xt[better]
-        jac[better] = jt[better]
-        full_jac = np.zeros((m,) + jac.shape[1:])
-        full_jac[idx] = jac
-    else:
-        full_jac = np.zeros((m, x.shape[1], x.shape[1]))
+        norm_t = np.abs(rt).max(axis=0)
+        better = admissible(xt, idx) & np.isfinite(norm_t) & (norm_t <= np.abs(r).max(axis=0))
+        x[:, idx[better]] = xt[:, better]
+        jac[..., better] = jt[..., better]
+        full_jac[..., idx] = jac
     return x, full_jac, converged
+
+
+def _line_search(evaluate, admissible, x, dx, r, idx):
+    """The Newton step dx from x (the systems ``idx``, residuals r there), halved until
+    the merit |r|^2 / 2 decreases (Armijo) at an admissible point. Returns (moved,
+    x, r, Jacobian), the last three at the points that moved."""
+    merit = 0.5 * np.sum(r * r, axis=0)
+    step = np.ones(len(idx))
+    todo = np.arange(len(idx))
+    moved = np.zeros(len(idx), dtype=bool)
+    for halving in range(MAX_HALVINGS):
+        xt = x[:, todo] + step[todo] * dx[:, todo]
+        rt, jt = evaluate(xt, idx[todo])
+        mt = 0.5 * np.sum(rt * rt, axis=0)
+        good = (admissible(xt, idx[todo]) & np.isfinite(mt) & np.isfinite(jt).all(axis=(0, 1))
+                & (mt <= (1.0 - 1e-4 * step[todo]) * merit[todo]))
+        if halving == 0:        # todo is every point: the full step's values in place
+            new_x, new_r, new_jac = xt, rt, jt
+        else:
+            g = todo[good]
+            new_x[:, g], new_r[:, g], new_jac[..., g] = xt[:, good], rt[:, good], jt[..., good]
+        moved[todo[good]] = True
+        todo = todo[~good]
+        if todo.size == 0:
+            break
+        step[todo] *= 0.5
+    if moved.all():
+        return moved, new_x, new_r, new_jac
+    return moved, new_x[:, moved], new_r[:, moved], new_jac[..., moved]
 
 
 def scalar_root(fun, lo, hi, x0=None):
@@ -322,28 +375,36 @@ class LocalProblem:
 
         def evaluate(x, kk):
             k = sel[kk]
-            xi, J, dg, h = x.T
+            xi, J, dg, h = x
             p, dp = self.pressure(xi)
             s = self.surface(p, J, h, k)
-            rh, rh_h, rh_c = self.hardening(h, dg * s.f_p, k)
+            dg_p = dg * s.f_p
+            rh, rh_h, rh_c = self.hardening(h, dg_p, k)
             c = bulk.compliance(p)
-            r = np.stack([bulk.strain(p, p_n[k]) - de_in[kk] + dg * s.f_p,
-                          (J - J_in[kk]) / G + dg * s.f_J,
-                          s.f,
-                          rh], axis=1)
-            jac = np.empty((len(k), 4, 4))
-            jac[:, 0] = np.stack([(c + dg * s.f_pp) * dp, dg * s.f_pJ, s.f_p, dg * s.f_ph], axis=1)
-            jac[:, 1] = np.stack([dg * s.f_pJ * dp, 1.0 / G + dg * s.f_JJ, s.f_J, dg * s.f_Jh],
-                                 axis=1)
-            jac[:, 2] = np.stack([s.f_p * dp, s.f_J, np.zeros_like(s.f_p), s.f_h], axis=1)
-            jac[:, 3] = np.stack([rh_c * dg * s.f_pp * dp, rh_c * dg * s.f_pJ, rh_c * s.f_p,
-                                  rh_h + rh_c * dg * s.f_ph], axis=1)
-            scale = np.stack([self.strain_row[k], self.strain_row[k], 1.0 / s.scale,
-                              self.h_row[k]], axis=1)
-            return r * scale, jac * scale[:, :, None]
+            dg_pp, dg_pJ, dg_ph = dg * s.f_pp, dg * s.f_pJ, dg * s.f_ph
+            r, jac = np.empty((4, len(k))), np.empty((4, 4, len(k)))
+            r[0] = bulk.strain(p, p_n[k]) - de_in[kk] + dg_p
+            r[1] = (J - J_in[kk]) / G + dg * s.f_J
+            r[2] = s.f
+            r[3] = rh
+            rows = (((c + dg_pp) * dp, dg_pJ, s.f_p, dg_ph),
+                    (dg_pJ * dp, 1.0 / G + dg * s.f_JJ, s.f_J, dg * s.f_Jh),
+                    (s.f_p * dp, s.f_J, 0.0, s.f_h),
+                    (rh_c * dg * s.f_pp * dp, rh_c * dg * s.f_pJ, rh_c * s.f_p,
+                     rh_h + rh_c * dg * s.f_ph))
+            for i, row in enumerate(rows):
+                for j, entry in enumerate(row):
+                    jac[i, j] = entry
+            scale = np.empty((4, len(k)))
+            scale[0] = scale[1] = self.strain_row[k]
+            scale[2] = 1.0 / s.scale
+            scale[3] = self.h_row[k]
+            r *= scale
+            jac *= scale[:, None]
+            return r, jac
 
         def ok(x, kk):
-            xi, J, _, h = x.T
+            xi, J, _, h = x
             p = self.pressure(xi)[0]
             good = bulk.admissible(p)
             return good if self.admissible is None else good & self.admissible(p, J, h, sel[kk])
@@ -352,8 +413,8 @@ class LocalProblem:
     def solution(self, x, sel):
         """Roots that are solutions: J >= 0 and dgamma >= 0 up to rounding."""
         t, i = self.trial, self.idx[sel]
-        return ((x[:, 1] >= -NEWTON_TOL * self.stress_scale[sel])
-                & (x[:, 2] >= -NEWTON_TOL * (np.abs(t.de_v[i]) + t.J_tr[i] / self.G)))
+        return ((x[1] >= -NEWTON_TOL * self.stress_scale[sel])
+                & (x[2] >= -NEWTON_TOL * (np.abs(t.de_v[i]) + t.J_tr[i] / self.G)))
 
     def trial_path(self, t, sel):
         """(de_v, J_tr, xi_tr) of the points sel at the fraction t of the step."""
@@ -398,29 +459,32 @@ def smooth_return(surface, hardening, bulk, G, trial, idx, p_tr, h_n, x0, stress
                            log_shift, admissible)
     every = np.arange(m)
     with np.errstate(all="ignore"):
-        x, jac, converged = newton(*problem.system(trial.de_v[idx], trial.J_tr[idx], every), x0)
+        x, jac, converged = newton(*problem.system(trial.de_v[idx], trial.J_tr[idx], every),
+                                   x0.T)
         converged &= problem.solution(x, every)
         failed = np.flatnonzero(~converged)
         if failed.size and fallback is not None:
             sub = problem.system(trial.de_v[idx[failed]], trial.J_tr[idx[failed]], failed)
-            xf, jf, cf = newton(*sub, fallback[failed])
-            x[failed], jac[failed], converged[failed] = xf, jf, cf & problem.solution(xf, failed)
+            xf, jf, cf = newton(*sub, fallback[failed].T)
+            x[:, failed], jac[..., failed] = xf, jf
+            converged[failed] = cf & problem.solution(xf, failed)
             failed = np.flatnonzero(~converged)
         if failed.size:
             xf, jf, cf = _continuation(problem, failed)
-            x[failed], jac[failed], converged[failed] = xf, jf, cf & problem.solution(xf, failed)
-    xi, J, dgamma, h = x.T
+            x[:, failed], jac[..., failed] = xf, jf
+            converged[failed] = cf & problem.solution(xf, failed)
+    xi, J, dgamma, h = x
     # Iterates may cross J = 0 or dgamma = 0; a solution may not, beyond rounding.
     J, dgamma = np.maximum(J, 0.0), np.maximum(dgamma, 0.0)
     p, dp = problem.pressure(xi)
     # Implicit-function theorem: the inputs de_v, J_tr enter r_p as -de_v and r_J as -J_tr / G.
-    rhs = np.zeros((m, 4, 2))
-    rhs[:, 0, 0] = strain_row
-    rhs[:, 1, 1] = strain_row / G
-    jac[~converged] = np.eye(4)
+    rhs = np.zeros((4, 2, m))
+    rhs[0, 0] = strain_row
+    rhs[1, 1] = strain_row / G
+    jac[..., ~converged] = np.eye(4)[..., None]
     with np.errstate(all="ignore"):
         dx = _solve(jac, rhs)
-    sens = (dp * dx[:, 0, 0], dp * dx[:, 0, 1], dx[:, 1, 0], dx[:, 1, 1])
+    sens = (dp * dx[0, 0], dp * dx[0, 1], dx[1, 0], dx[1, 1])
     return p, J, dgamma, h, sens, converged
 
 
@@ -436,8 +500,8 @@ def _continuation(problem, sel):
     in N equal parts, each Newton solve starting from the last; N grows over
     :data:`CONTINUATION_PARTS` for the points that still fail. The answer is
     the one-step backward-Euler solution itself (the intermediate problems only
-    lead Newton to it), so the tangent is unchanged. Returns (x, Jacobian,
-    converged) aligned with ``sel``."""
+    lead Newton to it), so the tangent is unchanged. Returns (x (4, m), Jacobian
+    (4, 4, m), converged) aligned with ``sel``."""
     m = len(sel)
     # Elastic fraction by bisection (t_e = 0 if the step starts outside the surface).
     lo, hi = np.zeros(m), np.ones(m)
@@ -448,24 +512,25 @@ def _continuation(problem, sel):
         hi = np.where(out, mid, hi)
         lo = np.where(out, lo, mid)
     t_e = np.where(inside, lo, 0.0)
-    x = np.zeros((m, 4))
-    jac = np.zeros((m, 4, 4))
+    x = np.zeros((4, m))
+    jac = np.zeros((4, 4, m))
     converged = np.zeros(m, dtype=bool)
     todo = np.arange(m)
     for parts in CONTINUATION_PARTS:
         _, J0, xi0 = problem.trial_path(t_e[todo], sel[todo])
-        xk = np.stack([xi0, J0, np.zeros(todo.size), problem.h_n[sel[todo]]], axis=1)
+        xk = np.stack([xi0, J0, np.zeros(todo.size), problem.h_n[sel[todo]]])
         alive = np.ones(todo.size, dtype=bool)
         for k in range(1, parts + 1):
             live = np.flatnonzero(alive)
             t = t_e[todo[live]] + (1.0 - t_e[todo[live]]) * k / parts
             de_in, J_in, _ = problem.trial_path(t, sel[todo[live]])
-            xs, js, cs = newton(*problem.system(de_in, J_in, sel[todo[live]]), xk[live])
-            xk[live] = xs
+            xs, js, cs = newton(*problem.system(de_in, J_in, sel[todo[live]]), xk[:, live])
+            xk[:, live] = xs
             alive[live[~cs]] = False
             if k == parts:
                 done = live[cs]
-                x[todo[done]], jac[todo[done]], converged[todo[done]] = xs[cs], js[cs], True
+                x[:, todo[done]], jac[..., todo[done]] = xs[:, cs], js[..., cs]
+                converged[todo[done]] = True
         todo = todo[~alive]
         if todo.size == 0:
             break
