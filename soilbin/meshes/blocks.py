@@ -113,3 +113,13 @@ def on_plane(dim: int, tags: Sequence[int], point, normal) -> list[int]:
 
     return [tag for tag in tags
             if all(distance(c) <= tol for _, c in gmsh.model.getBoundary([(dim, tag)], recursive=True))]
+
+
+def plane_strain_groups(in_plane: dict, dimension: int, thickness: float) -> tuple[dict, dict]:
+    """(regions, boundaries) of a plane-strain builder's model: the one region "soil", the
+    boundaries ``in_plane`` (group -> entities) and, on a slab, its faces y = 0 ("front")
+    and y = thickness ("back")."""
+    boundaries = dict(in_plane)
+    if dimension == 3:
+        boundaries.update(front=entities_within(2, y=0.0), back=entities_within(2, y=thickness))
+    return {"soil": entities_within(dimension)}, boundaries

@@ -1,5 +1,5 @@
 """The retaining-wall builder's gmsh geometry (declaration: :mod:`.retaining_wall`)."""
-from .blocks import entities_within, extruded_grid
+from .blocks import entities_within, extruded_grid, plane_strain_groups
 from .retaining_wall import RetainingWallParams
 
 
@@ -13,6 +13,4 @@ def geometry(p: RetainingWallParams):
         "far": entities_within(facet, x=p.length),
         "base": entities_within(facet, z=-p.depth),
     }
-    if p.dimension == 3:
-        boundaries.update(front=entities_within(2, y=0.0), back=entities_within(2, y=p.thickness))
-    return {"soil": entities_within(p.dimension)}, boundaries
+    return plane_strain_groups(boundaries, p.dimension, p.thickness)

@@ -3,7 +3,7 @@ quadrilaterals graded from the footing edge in the x-z plane, extruded to one la
 hexahedra unless the mesh is two-dimensional."""
 import gmsh
 
-from .blocks import entities_within
+from .blocks import entities_within, plane_strain_groups
 from .strip_footing import StripFootingParams
 
 
@@ -86,6 +86,4 @@ def geometry(p: StripFootingParams):
         "far": entities_within(facet, x=p.width),
         "base": entities_within(facet, z=-p.depth),
     }
-    if p.dimension == 3:
-        boundaries.update(front=entities_within(2, y=0.0), back=entities_within(2, y=p.thickness))
-    return {"soil": entities_within(p.dimension)}, boundaries
+    return plane_strain_groups(boundaries, p.dimension, p.thickness)
