@@ -38,6 +38,17 @@ def test_the_plane_mesh_solves_the_slab_s_problem(solve, extra):
     np.testing.assert_allclose(pressures(plane_out), pressures(slab_out), rtol=1e-9)
 
 
+def test_the_rough_wall_s_tool_acts_on_the_plane_mesh_as_on_the_slab(solve):
+    """The wall a rigid tool behind the Mohr–Coulomb interface (2-in cells): Kp and the wall's
+    shear on the plane mesh equal the slab's, whose far boundary holds its hourglass family."""
+    runs = [solve("retaining-wall-passive-rough", "mesh.element_size=2", "output.fields=[]",
+                  *dimension)[0]
+            for dimension in (("mesh.dimension=3", "analysis.element=hex8-reduced"), ())]
+    for key in ("passive_coefficient", "wall_shear_coefficient"):
+        assert runs[1][key] == pytest.approx(runs[0][key], rel=1e-9)
+    assert runs[1]["newton_iterations"] == runs[0]["newton_iterations"]
+
+
 def test_quadratic_quadrilaterals_reach_prandtl_within_half_a_percent(solve):
     """quad9-bbar (Q2/P1) on the default 2D mesh: +0.31% (README, "Run time against error")."""
     summary, _ = solve("strip-footing-von-mises", "mesh.dimension=2", "analysis.element=quad9-bbar")

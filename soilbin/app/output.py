@@ -95,18 +95,23 @@ class MeshData:
 
 
 def tool_surface(problem):
-    """(points, quadrilaterals) of the cavity faces the tool acts on, initial geometry."""
+    """(points, cells, XDMF topology) of the faces the tool acts on, initial geometry, in
+    the scene's three coordinates: quadrilaterals, or the segments of a 2D mesh."""
     mesh, tagged = problem.mesh, problem.tagged
-    owned = mesh.topology.index_map(2).size_local
+    dim = mesh.topology.dim - 1
+    owned = mesh.topology.index_map(dim).size_local
     facets = np.concatenate([tagged.facet_tags.find(tagged.boundaries[face])
                              for face in problem.scene.tool.faces])
     facets = np.unique(facets[facets < owned]).astype(np.int32)
-    nodes = entities_to_geometry(mesh._mesh, 2, facets, False)   # 0.5: the C++ mesh
-    corners = _gather(mesh.comm, mesh.geometry.x[nodes.ravel()].reshape(-1, 3))
+    nodes = entities_to_geometry(mesh._mesh, dim, facets, False)   # 0.5: the C++ mesh
+    x = mesh.geometry.x[nodes.ravel(), :mesh.geometry.dim] @ embedding(mesh.geometry.dim).T
+    corners = _gather(mesh.comm, x)
     if corners is None:
-        return None, None
+        return None, None, None
+    if dim == 1:
+        return corners, np.arange(len(corners)).reshape(-1, 2), "Polyline"
     quads = np.arange(len(corners)).reshape(-1, 4)[:, perm_vtk(CellType.quadrilateral, 4)]
-    return corners, quads
+    return corners, quads, "Quadrilateral"
 
 
 class FieldWriter:
@@ -121,12 +126,12 @@ class FieldWriter:
                                  self._mesh.topology, CONVENTIONS) if rank0 else None)
         self._tool, self._direction = None, None
         if problem.tool is not None:
-            points, quads = tool_surface(problem)
+            points, cells, topology = tool_surface(problem)
             self._direction = np.asarray(problem.tool.direction, dtype=float)
             if rank0:
-                self._tool = XdmfSeries(folder / "tool.xdmf", points, quads, "Quadrilateral",
+                self._tool = XdmfSeries(folder / "tool.xdmf", points, cells, topology,
                                         CONVENTIONS)
-                self._tool_mesh = (points, quads)
+                self._tool_mesh = (points, cells)
         self.last = None   # (points, cells, point data, cell data) of the last frame, rank 0
 
     def write(self, t, tool_travel=0.0):
@@ -147,8 +152,8 @@ class FieldWriter:
 
     def picture(self):
         """(soil, tool) of the last frame for :func:`figures_3d.soil_3d_png` on rank 0, or
-        None (no tool, or displacement or plastic strain not written)."""
-        if self._tool is None or self.last is None:
+        None (no tool, a two-dimensional mesh, or displacement or plastic strain not written)."""
+        if self._tool is None or self.last is None or self._mesh.topology != "Hexahedron":
             return None
         _, _, point_data, cell_data = self.last
         if "displacement" not in point_data or "plastic_strain" not in cell_data:

@@ -124,10 +124,11 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     setup_s = time.perf_counter() - start
 
     stops = scene.output.stops(scene.loading)
+    sections = problem.tool is not None and not problem.disc.planar   # cuts through the soil
 
     def on_step(record):
         folder.add_step(record)
-        if problem.tool is not None and any(abs(record.load_factor - s) < 1e-9 for s in stops):
+        if sections and any(abs(record.load_factor - s) < 1e-9 for s in stops):
             load = record.load_factor * scene.loading.magnitude
             section_figures.sections_png(problem, scene, load, out_dir / f"sections-{load:g}.png")
         if progress is not None:
@@ -187,7 +188,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     folder.finish(summary, interrupted=interrupted is not None)
     if records and comm.rank == 0:
         figures.curve_png(records, scene, out_dir / "curve.png", estimate)
-    if interrupted is None and records and problem.tool is not None and problem.tool.interface is not None:
+    if interrupted is None and records and sections:
         figures.tool_section_png(problem, out_dir / "tool-section.png")
     picture = folder.fields.picture() if folder.fields is not None and comm.rank == 0 else None
     if interrupted is None and records and picture is not None:

@@ -5,13 +5,17 @@ from mpi4py import MPI
 from dolfinx import fem
 from dolfinx.mesh import compute_midpoints
 
+from ..elements import embedding
+
 
 def cell_ahead(mesh, point, direction):
     """The local index of the cell whose midpoint lies ahead of ``point`` along ``direction``
-    and nearest to it, on the one rank that holds it (-1 on the others)."""
+    (both in the scene's three components) and nearest to it, on the one rank that holds it
+    (-1 on the others)."""
     n_owned = mesh.topology.index_map(mesh.topology.dim).size_local
     cells = np.arange(n_owned, dtype=np.int32)
-    midpoints = compute_midpoints(mesh, mesh.topology.dim, cells)
+    dim = mesh.geometry.dim
+    midpoints = compute_midpoints(mesh, mesh.topology.dim, cells)[:, :dim] @ embedding(dim).T
     ahead = (midpoints - point) @ direction > 0.0
     distance = np.linalg.norm(midpoints - point, axis=1)
     distance[~ahead] = np.inf
@@ -25,7 +29,7 @@ class CellValue:
     """A scalar UFL expression at the midpoint of one cell, returned on every rank."""
 
     def __init__(self, mesh, expression, cell):
-        self._expression = fem.Expression(expression, np.array([[0.5, 0.5, 0.5]]))
+        self._expression = fem.Expression(expression, np.full((1, mesh.topology.dim), 0.5))
         self._cell, self._comm = cell, mesh.comm
 
     def __call__(self):

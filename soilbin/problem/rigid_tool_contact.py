@@ -8,7 +8,11 @@ the face and the face normal averaged at the node: the penalty terms are
 integrated with the nodal (lumped) rule, so the law and its slip history
 live exactly at the contact points and a node on an edge of the tool
 touches both faces. Residual += A t(u − U), Jacobian += A dt/djump on the
-node's own 3x3 block (rows and columns of Dirichlet dofs left alone).
+node's own 3x3 block (rows and columns of Dirichlet dofs left alone). On a
+two-dimensional mesh the law still works in the scene's three components (the
+jump's y component is zero, so is the traction's); the node's dofs are its x
+and z ones, which take those components of the traction and the 2x2 block of
+the tangent.
 
 A support may hold a node of a face too. Along the face (the block on a
 plate, held at its end, that the plate slides under) the law still acts:
@@ -43,14 +47,16 @@ class RigidToolContact:
         scalar_space = fem.FunctionSpace(mesh, V.ufl_element().sub_elements()[0])
         nodes_map = scalar_space.dofmap.index_map
         owned = nodes_map.size_local
+        #: The scene's axes of the dof components (x, y, z; x and z on a 2D mesh).
+        self.axes = [axis for axis in range(3) if disc.component(axis) is not None]
         # the unknown's dof of each component at each node, matched cell by cell (no
         # V.sub(i).collapse(), which builds and reorders a dof map per component)
-        nodal_dofs = np.empty((owned + nodes_map.num_ghosts, 3), dtype=np.int32)
+        nodal_dofs = np.empty((owned + nodes_map.num_ghosts, len(self.axes)), dtype=np.int32)
         nodal_dofs[scalar_space.dofmap.list.array] = np.stack(
-            [V.sub(i).dofmap.list.array for i in range(3)], axis=1)
+            [V.sub(i).dofmap.list.array for i in range(len(self.axes))], axis=1)
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
         phi = ufl.TestFunction(scalar_space)
-        normal = ufl.FacetNormal(mesh)
+        normal = disc.normal()
         fixed = np.zeros(len(w.x.array), dtype=bool)
         for bc in bcs:
             fixed[bc.dof_indices()[0]] = True
@@ -75,7 +81,7 @@ class RigidToolContact:
             n = np.stack([component(i) for i in range(3)], axis=1)[on_face]
             n /= np.linalg.norm(n, axis=1)[:, None]
             # held components along the travel and the normal (beyond round-off): the support's
-            pressed = fixed[nodal_dofs[on_face]] & (np.abs(n * travel) > 1e-9)
+            pressed = fixed[nodal_dofs[on_face]] & (np.abs(n * travel)[:, self.axes] > 1e-9)
             pressed_dofs.append(nodal_dofs[on_face][pressed])
             contact = ~pressed.any(axis=1)
             nodes.append(on_face[contact])
@@ -89,9 +95,10 @@ class RigidToolContact:
         self.areas = np.concatenate(areas)
         self.normals = np.concatenate(normals)
         self.dofs = nodal_dofs[self.nodes].astype(PETSc.IntType)
-        self._free = ~fixed[self.dofs]                    # (n_points, 3)
+        self._free = ~fixed[self.dofs]                    # (n_points, dof components)
         self.law = law
-        self.reference_points = scalar_space.tabulate_dof_coordinates()[self.nodes]  # initial mesh
+        x = scalar_space.tabulate_dof_coordinates()[self.nodes, :disc.dimension]
+        self.reference_points = disc.to_world(x)          # on the initial mesh
         # A tool wished in place carries the in-situ traction t0 = -σ0 n: the jump
         # is offset by t0_n n / k_n + t0_t / k_s, so that the law returns t0 at zero jump.
         self._jump0 = np.zeros((len(self.nodes), 3))
@@ -121,7 +128,9 @@ class RigidToolContact:
         return values
 
     def _soil_displacement(self):
-        return self._committed_displacement + self._w.x.array[self.dofs]
+        u = np.zeros((len(self.dofs), 3))
+        u[:, self.axes] = self._w.x.array[self.dofs]
+        return self._committed_displacement + u
 
     def jump(self):
         return self._soil_displacement() - self.tool_displacement + self._jump0
@@ -138,7 +147,7 @@ class RigidToolContact:
 
     def add_residual(self, b):
         """Residual (internal − external) += A t at the owned, free dofs."""
-        forces = self.areas[:, None] * self._traction * self._free
+        forces = self.areas[:, None] * self._traction[:, self.axes] * self._free
         with b.localForm() as local:
             np.add.at(local.array, self.dofs.ravel(), forces.ravel())
 
@@ -146,7 +155,7 @@ class RigidToolContact:
         if not len(self.dofs):   # no contact point on this rank (PETSc divides by the count)
             return
         free = self._free[:, :, None] & self._free[:, None, :]
-        blocks = self.areas[:, None, None] * self._tangent * free
+        blocks = self.areas[:, None, None] * self._tangent[:, self.axes][:, :, self.axes] * free
         A.setValuesLocalRCV(self.dofs, self.dofs, blocks, addv=PETSc.InsertMode.ADD)
 
     def travel_derivatives(self, direction, b, c):
@@ -158,7 +167,8 @@ class RigidToolContact:
         for vector, values in ((b, -self.areas[:, None] * t_d), (c, -self.areas[:, None] * tt_d)):
             with vector.localForm() as local:
                 local.set(0.0)
-                np.add.at(local.array, self.dofs.ravel(), (values * self._free).ravel())
+                np.add.at(local.array, self.dofs.ravel(),
+                          (values[:, self.axes] * self._free).ravel())
         return self.comm.allreduce(float(self.areas @ (t_d @ direction)), op=MPI.SUM)
 
     def commit(self):

@@ -373,7 +373,7 @@ def _parse(raw, path):
         _choice(name, where, boundary_groups, f"{source} has no such boundary; its boundaries")
 
     analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
-    _check_dimension(builder.dimension(mesh), analysis, supports, tractions, loading, tool)
+    _check_dimension(builder.dimension(mesh), analysis, supports, tractions, loading)
     _check_held(supports, loading, analysis, tool)
     headline = {}
     unread, driven = ((BOUNDARY_HEADLINES, "a tool") if loading.boundary == TOOL
@@ -402,9 +402,9 @@ def _parse(raw, path):
                  headline=headline, tool=tool, tractions=tractions, geostatic=geostatic)
 
 
-def _check_dimension(dimension, analysis, supports, tractions, loading, tool):
+def _check_dimension(dimension, analysis, supports, tractions, loading):
     """The element fits the mesh's cells; a two-dimensional mesh is a plane-strain x-z plane:
-    nothing acts along y, and no tool or frame rotation (both need three dimensions)."""
+    nothing acts along y, and it cannot be turned out of its plane."""
     element = analysis.element
     if element.dimension != dimension:
         cells = "hexahedra" if dimension == 3 else "quadrilaterals (mesh.dimension = 2)"
@@ -423,8 +423,6 @@ def _check_dimension(dimension, analysis, supports, tractions, loading, tool):
     for key, direction in along_y + [("loading.direction", loading.direction)]:
         if direction.axis == 1:
             raise InputError(f"{key} = {direction.value!r}: {where} has no y direction")
-    if tool is not None:
-        raise InputError(f"tool: a rigid tool needs a three-dimensional mesh, not {where}")
     if any(analysis.frame_rotation):
         raise InputError(f"analysis.frame_rotation: {where} cannot be turned out of its plane")
 
