@@ -32,7 +32,9 @@ SIGTERM (summary.json has status "interrupted"; converged steps are on disk).
 """
 
 
-def _parser():
+def _parser(point_details=True):
+    """The command line's parser; without ``point_details`` the ``point`` command's own
+    help (its paths and their parameters) is left out, and NumPy is not loaded for it."""
     parser = argparse.ArgumentParser(
         prog="soilbin", description="Geometric and material nonlinear finite element analysis "
         "of soil-structure interaction (DOLFINx).",
@@ -61,7 +63,7 @@ def _parser():
     keys.add_argument("scene", help="scene file, or the name of a scene in scenes/")
     keys.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                       help="override a scene value first (repeatable)")
-    _point_parser(sub)
+    _point_parser(sub, point_details)
     from .study import add_parser as add_study_parser
     add_study_parser(sub)
     return parser
@@ -88,29 +90,31 @@ written), 2 bad input.
 """
 
 
-def _point_parser(sub):
-    import textwrap
-    from ..material_point.paths import PATHS
-    from ..params import describe
-    lines = []
-    for name, cls in PATHS.items():
-        lines += textwrap.wrap(f"{name}: {' '.join((cls.__doc__ or '').split())}", 79,
-                               initial_indent="  ", subsequent_indent="    ")
-        for line in describe(cls):
-            lines += textwrap.wrap(line, 79, initial_indent="    - ", subsequent_indent="      ")
+def _point_parser(sub, details=True):
+    lines, paths = [], {}
+    if details:
+        import textwrap
+        from ..material_point.paths import PATHS as paths
+        from ..params import describe
+        for name, cls in paths.items():
+            lines += textwrap.wrap(f"{name}: {' '.join((cls.__doc__ or '').split())}", 79,
+                                   initial_indent="  ", subsequent_indent="    ")
+            for line in describe(cls):
+                lines += textwrap.wrap(line, 79, initial_indent="    - ",
+                                       subsequent_indent="      ")
     point = sub.add_parser(
         "point", help="drive one material point of a model along a loading path",
         description="Drive one material point of a constitutive model (the classes of the FE\n"
         "solve) along a strain-, stress- or mixed-controlled loading path and write the\n"
         "output folder: path.csv (one row per step), path.png (q-p stress path,\n"
         "stress-strain, volumetric strain) and summary.json.",
-        epilog=POINT_EPILOG.format(paths="\n".join(lines)),
+        epilog=POINT_EPILOG.format(paths="\n".join(lines)) if details else None,
         formatter_class=argparse.RawDescriptionHelpFormatter)
     point.add_argument("model", metavar="MODEL",
                        help="a constitutive model (elastic, drucker_prager, ...: the keys of "
                             "soilbin.models.MODELS), or SCENE.toml:NAME for the model and "
                             "parameters of [materials.NAME] in a scene file (or scene name)")
-    point.add_argument("path", metavar="PATH", help=f"loading path: {', '.join(PATHS)}")
+    point.add_argument("path", metavar="PATH", help=f"loading path: {', '.join(paths)}")
     point.add_argument("--set", dest="overrides", action="append", default=[],
                        metavar="KEY=VALUE",
                        help="a model parameter (E=4000, matching=compression_cone; overrides "
@@ -259,7 +263,8 @@ def _rank0():
 
 def main(argv=None):
     _quiet_logging()
-    args = _parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = _parser(point_details="point" in argv).parse_args(argv)
     command = {"run": _run, "list": _list_scenes, "point": _point, "keys": _keys,
                "study": _study}[args.command]   # only run loads DOLFINx
     with interrupt.handlers():
