@@ -18,12 +18,12 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
 * ``blr``: GMRES preconditioned by MUMPS's block low-rank LU of the same
   (condensed) system: the off-diagonal blocks of the fronts compressed to
   ``BLR_TOLERANCE`` (MUMPS ICNTL(35), CNTL(7); Amestoy et al. 2015, SIAM J.
-  Sci. Comput. 37(3):A1451). A factorisation per iterate: unlike GAMG its
-  GMRES count stays at about 10 while the cap's plastic zone spreads (tine,
-  refine 3: 9, 10, 8; GAMG's grows to hundreds); the factor of one iterate
-  kept for the next took 200 GMRES iterations without converging (refine 2).
-  On refine 4 of the tine (10⁶ unknowns) it peaks at 17 GB; MUMPS estimates
-  the full-rank LU's factorisation alone at 24.6 GB.
+  Sci. Comput. 37(3):A1451). A factorisation per iterate: the factor of one
+  iterate kept for the next took 200 GMRES iterations without converging
+  (tine, refine 2). GMRES iterations in the tine's first Newton iterations:
+  refine 3, 9, 10, 8; refine 4 (10⁶ unknowns), 11, 15, then more than 170
+  (GAMG: 92, 751). On refine 4 it peaks at 17 GB; MUMPS estimates the
+  full-rank LU's factorisation alone at 24.6 GB.
 
 Both factorisations use the PORD ordering above ``PORD_DOFS`` unknowns
 (measured faster than MUMPS's automatic choice on the footing and the tine,
