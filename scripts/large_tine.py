@@ -5,7 +5,7 @@
 
 One load step of the default tine scene (1/8 of its travel, the step out of the
 K0 state, the hardest of the run) with GMRES + GAMG (``solver.linear = "amg"``)
-unless overridden. Prints a line per Newton iteration (CPU seconds of the
+unless overridden (``--set solver.linear=blr``: GMRES + block low-rank LU). Prints a line per Newton iteration (CPU seconds of the
 iteration on rank 0, its Krylov iterations, the residual, the peak resident
 memory summed over the ranks) and writes them with the set-up's to
 ``--out`` (JSON), for the README's large-mesh row.

@@ -31,6 +31,27 @@ def test_every_linear_solver_gives_the_same_curve():
     assert problem.newton.linear.stats["unsymmetric_solves"] == 0   # von Mises: symmetric
 
 
+# the tine on a coarse mesh (tests/test_reliability.py's), over its cap's first yield
+COARSE_TINE = ("mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "mesh.behind=10.0",
+               "mesh.bin_width=10.0", "loading.steps=2", "loading.magnitude=0.025")
+
+
+def test_blr_gives_the_curve_of_lu_on_the_tine():
+    """GMRES on the block low-rank factor of the condensed system follows LU's curve (the
+    cap's unsymmetric tangent, cut steps included), counting its Krylov iterations."""
+    curves = {}
+    for kind in ("lu", "blr"):
+        problem = make_problem("tine-2in-90deg", *COARSE_TINE, f"solver.linear={kind}")
+        result = run_load_steps(problem, 2, 3, lambda r: None)
+        assert result.complete
+        curves[kind] = np.array([(r.load_factor, r.force) for r in result.steps])
+    stats = problem.newton.linear.stats
+    assert problem.newton.linear.description.startswith("GMRES + MUMPS BLR LU")
+    assert stats["factorisations"] == stats["solves"] <= stats["krylov_iterations"]
+    assert curves["blr"][:, 0] == pytest.approx(curves["lu"][:, 0], rel=1e-12)
+    assert curves["blr"][:, 1] == pytest.approx(curves["lu"][:, 1], rel=1e-6)
+
+
 def test_auto_takes_lu_in_large_deformation():
     problem = make_problem("tine-2in-90deg", "analysis.large_deformation=true")
     assert problem.newton.linear.description == "MUMPS LU"

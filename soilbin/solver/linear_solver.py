@@ -1,4 +1,4 @@
-"""The linear solve of each Newton iterate: MUMPS LU, MUMPS LDLᵀ, or AMG-preconditioned Krylov.
+"""The linear solve of each Newton iterate: MUMPS LU, MUMPS LDLᵀ, or preconditioned Krylov.
 
 ``solver.linear`` picks one (``auto``: LDLᵀ when the Jacobian can be
 symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
@@ -15,6 +15,15 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
   the rigid-body modes as near-nullspace. ``hex8-bbar`` systems are
   condensed first (``condensation.CellCondensation``: the cell dilatation
   and pressure eliminated exactly), since AMG needs a displacement system.
+* ``blr``: GMRES preconditioned by MUMPS's block low-rank LU of the same
+  (condensed) system: the off-diagonal blocks of the fronts compressed to
+  ``BLR_TOLERANCE`` (MUMPS ICNTL(35), CNTL(7); Amestoy et al. 2015, SIAM J.
+  Sci. Comput. 37(3):A1451). A factorisation per iterate: the factor of one
+  iterate kept for the next took 200 GMRES iterations without converging
+  (tine, refine 2). GMRES iterations in the tine's first Newton iterations:
+  refine 3, 9, 10, 8; refine 4 (10⁶ unknowns), 11, 15, then more than 170
+  (GAMG: 92, 751). On refine 4 it peaks at 17 GB; MUMPS estimates the
+  full-rank LU's factorisation alone at 24.6 GB.
 
 Both factorisations use the PORD ordering above ``PORD_DOFS`` unknowns
 (measured faster than MUMPS's automatic choice on the footing and the tine,
@@ -37,6 +46,9 @@ AMG_DOFS = 300_000
 PORD_DOFS = 5000
 #: Krylov tolerance relative to the right-hand side (Newton's rtol is 1e-9).
 KRYLOV_RTOL = 1e-10
+#: BLR compression tolerance, relative (MUMPS CNTL(7)); on the tine, refine 3: 1e-3 took
+#: 24-32 GMRES iterations (1e-4: 8-10) for 30% less factorisation time, 8% less in all.
+BLR_TOLERANCE = 1e-4
 
 
 def all_symmetric(blocks, comm):
@@ -51,7 +63,7 @@ class LinearSolveError(ConvergenceError):
     """The linear solve failed (singular factor, Krylov divergence); the step is cut."""
 
 
-def _mumps(ksp, prefix, factor, n_dofs):
+def _mumps(ksp, prefix, factor, n_dofs, **more):
     ksp.setOptionsPrefix(prefix)
     options = PETSc.Options(prefix)
     for key, value in {"ksp_type": "preonly", "pc_type": factor,
@@ -59,7 +71,7 @@ def _mumps(ksp, prefix, factor, n_dofs):
                        "mat_mumps_icntl_7": 4 if n_dofs >= PORD_DOFS else 7,
                        # null pivots (soil yielded at the apex, zero tangent) are detected and
                        # their solution components set to zero, not an abort
-                       "mat_mumps_icntl_24": 1}.items():
+                       "mat_mumps_icntl_24": 1, **more}.items():
         options.setValue(key, value)
     ksp.setFromOptions()
 
@@ -87,11 +99,17 @@ class LinearSolver:
         if kind is LinearSolverKind.CHOLESKY:
             _mumps(self._ksp, prefix + "ldlt_", "cholesky", n_dofs)
             return
-        if disc.element.mixed and disc.element.degree == 2 and kind is LinearSolverKind.AMG:
+        bbar = disc.element.mixed and disc.element.degree == 1
+        if kind is LinearSolverKind.BLR:   # any system factorises; B-bar's condensed is smaller
+            self._condensed = CellCondensation(disc) if bbar else None
+            _mumps(self._ksp, prefix + "blr_", "lu", n_dofs, ksp_type="gmres",
+                   ksp_rtol=KRYLOV_RTOL, ksp_max_it=200, ksp_gmres_restart=200,
+                   mat_mumps_icntl_35=1, mat_mumps_cntl_7=BLR_TOLERANCE)
+            return
+        if disc.element.mixed and not bbar:
             raise InputError(f"solver.linear = amg: not for {disc.element.value} (its cell "
                              f"fields are not condensed); use lu or cholesky")
-        self._condensed = (CellCondensation(disc) if disc.element.mixed and disc.element.degree == 1
-                           else Uncondensed(disc))
+        self._condensed = CellCondensation(disc) if bbar else Uncondensed(disc)
         ksp = self._ksp
         ksp.setOptionsPrefix(prefix + "amg_")
         options = PETSc.Options(prefix + "amg_")
@@ -113,6 +131,9 @@ class LinearSolver:
             if not self._symmetric or (lu and lu == every):
                 return "MUMPS LU (the Jacobian is unsymmetric)"
             return "MUMPS LDLT" + (f", LU for {lu} of {every} iterates (unsymmetric)" if lu else "")
+        if self.kind is LinearSolverKind.BLR:
+            return "GMRES + MUMPS BLR LU" + (f" ({self._condensed.description})"
+                                             if self._condensed is not None else "")
         return f"GMRES + GAMG ({self._condensed.description})"
 
     def set_operator(self, A, symmetric_tangent):
@@ -149,7 +170,7 @@ class LinearSolver:
             raise LinearSolveError(f"the linear solve failed (PETSc error {err.ierr})") from None
         reason = ksp.getConvergedReason()
         self.stats["solves"] += 1
-        if self.kind is LinearSolverKind.AMG:
+        if self.kind in (LinearSolverKind.AMG, LinearSolverKind.BLR):
             self.stats["krylov_iterations"] += ksp.getIterationNumber()
         self.stats["solve_s"] += time.process_time() - start
         if reason < 0:
