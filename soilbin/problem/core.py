@@ -45,10 +45,16 @@ class SoilProblem:
                      if scene.tool is not None else None)
         self.drive = (self.tool if scene.loading.boundary == TOOL else
                       BoundaryLoad(scene, tagged_mesh, disc, frame, self.kinematics, self.supports,
-                                   v))
+                                   self.w, v))
+        #: The Newton system's one extra unknown, if any: a force-controlled tool's travel, or
+        #: the traction's magnitude under indirect displacement control.
+        self.border = (self.tool if self.tool is not None and self.tool.force_controlled else
+                       self.drive if self.drive is not self.tool and self.drive.indirect else None)
         self.bcs = self.supports.bcs
         self.newton = self._newton(v)
-        self._factor, self._factors, self._travels = 0.0, (0.0, 0.0), (0.0, 0.0)
+        if self.border is not None and self.border is not self.tool:
+            self.drive.calibrate(self.newton.tangent_solve)
+        self._factor, self._factors, self._border_values = 0.0, (0.0, 0.0), (0.0, 0.0)
 
     def _material_points(self):
         scene, tagged = self.scene, self.tagged
@@ -82,7 +88,7 @@ class SoilProblem:
         newton = NewtonSolver(self.comm, residual, jacobian, self.w, self.bcs,
                               self.update_material_state, self.scene.solver, self.disc,
                               nodal_terms=tool.nodal_terms if tool else [],
-                              border=tool if tool and tool.force_controlled else None,
+                              border=self.border,
                               symmetric=not self.kinematics.incremental,
                               symmetric_tangent=symmetric_tangent)
         if dead is not None:   # loads present from the start set the force scale
@@ -116,15 +122,16 @@ class SoilProblem:
     # -- the load stepper's protocol -------------------------------------------------
     def set_load_factor(self, factor):
         """The load at ``factor`` and, after two converged states, the first iterate
-        extrapolated linearly from them (the tool's travel under force control too)."""
+        extrapolated linearly from them (the border's unknown too)."""
         self.drive.set_factor(factor)
         self._factor = factor
         last, before = self._factors
         if last > before:
             ratio = (factor - last) / (last - before)
             self.kinematics.predict(ratio)
-            if self.tool is not None and self.tool.force_controlled:
-                self.tool.set_value(self._travels[0] + ratio * (self._travels[0] - self._travels[1]))
+            if self.border is not None:
+                last, before = self._border_values
+                self.border.set_value(last + ratio * (last - before))
 
     def solve(self):
         """Equilibrium at the current load factor, starting from the last committed state."""
@@ -132,8 +139,8 @@ class SoilProblem:
 
     def commit(self):
         self._factors = (self._factor, self._factors[0])
-        if self.tool is not None:
-            self._travels = (self.tool.travel, self._travels[0])
+        if self.border is not None:
+            self._border_values = (self.border.value, self._border_values[0])
         self.drive.commit()
         if self.tool is not None and self.tool is not self.drive:
             self.tool.commit()
@@ -143,6 +150,8 @@ class SoilProblem:
         self.w.x.array[:] = self.w_committed.x.array
         if self.tool is not None:
             self.tool.roll_back()
+        if self.drive is not self.tool:
+            self.drive.roll_back()
 
     def observe(self):
         """Displacement and force of the driven boundary or tool along the loading direction,

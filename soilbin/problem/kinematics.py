@@ -55,6 +55,10 @@ class SmallStrain:
         """The displacement from the initial configuration (UFL)."""
         return self._disc.displacement(self._w)
 
+    def iterate_displacement(self):
+        """The displacement from the initial configuration at the current iterate (UFL)."""
+        return self.total_displacement()
+
     def volume_change(self):
         """Volumetric strain since the initial configuration, ε_v = div u (UFL)."""
         return self._disc.div(self.total_displacement())
@@ -112,6 +116,11 @@ class UpdatedLagrangian:
     def total_displacement(self):
         """The displacement from the initial configuration (UFL, three components)."""
         return self._disc.embed(self._motion.total)
+
+    def iterate_displacement(self):
+        """The displacement from the initial configuration at the current iterate: the
+        converged total and the step's increment (UFL)."""
+        return self.total_displacement() + self._disc.displacement(self._w)
 
     def volume_change(self):
         """dV/dV0 − 1 = 1/det(I − ∇u) − 1, with u the total displacement on the current mesh."""

@@ -162,27 +162,44 @@ def dead_loads(scene, tagged, disc, frame, kinematics, v):
 
 
 class BoundaryLoad:
-    """A facet group driven by the load factor: a traction (force control) or a displacement
-    (displacement control, through the supports' prescribed values)."""
+    """A facet group driven by the load factor: a traction (force control), a displacement
+    (displacement control, through the supports' prescribed values), or a traction whose
+    magnitude p is one more unknown of the Newton system, with the equation that the
+    boundary's mean displacement along the loading direction is the load factor's
+    (indirect displacement control, de Borst 1987: the load follows the soil to its peak
+    and past it, with no step cut at the limit). Under the last it is the
+    :class:`~soilbin.solver.newton.NewtonSolver`'s border: its equation is written in force
+    units, g = k (ū − ū*), k = ‖f‖ / (∂ū/∂p) with f the nodal load of p = 1 and ∂ū/∂p the
+    mean displacement per unit p of the first tangent (:meth:`calibrate`), so that the
+    Newton residual's norm weighs it as the load that would close it."""
     #: Per-step values beside displacement and force (see :meth:`observe`).
     columns = ("pressure",)
 
-    def __init__(self, scene, tagged, disc, frame, kinematics, supports, v):
+    def __init__(self, scene, tagged, disc, frame, kinematics, supports, w, v):
         loading = scene.loading
         mesh = disc.mesh
         self._control, self._magnitude = loading.control, loading.magnitude
         self._supports, self._kinematics = supports, kinematics
+        self.indirect = loading.control is Control.INDIRECT
         self.direction = frame.vector(loading.direction)
         self._ds = disc.facet_measure(tagged.facet_tags)(tagged.boundaries[loading.boundary])
         self._load = fem.Constant(mesh, PETSc.ScalarType(0.0))
         self.external = (traction(disc, kinematics, self._load, self.direction, self._ds, v)
-                         if loading.control is Control.FORCE else None)
+                         if loading.control is not Control.DISPLACEMENT else None)
         self._probe = probe(disc, tagged, (loading.boundary,), loading.direction.vector, supports)
         self._v, self._force = v, None
         self._area = area_of(mesh, self._ds)
-        self._displacement = fem.form(
-            ufl.dot(ufl.as_vector(self.direction), kinematics.total_displacement()) * self._ds)
+        along = ufl.as_vector(self.direction)
+        self._displacement = fem.form(ufl.dot(along, kinematics.total_displacement()) * self._ds)
         self._factor = self._committed_factor = 0.0
+        if self.indirect:
+            moved = ufl.dot(along, kinematics.iterate_displacement()) * self._ds
+            self._moved = fem.form(moved)
+            self._moved_derivative = fem.form(ufl.derivative(moved, w, v))
+            unit = fem.Constant(mesh, PETSc.ScalarType(1.0))
+            self._unit_load = fem.form(traction(disc, kinematics, unit, self.direction, self._ds, v))
+            self._stiffness = 1.0   # k, until calibrated
+            self._committed_load = 0.0
 
     def measure_with(self, internal):
         """Read the force on the boundary as the internal force on its dofs."""
@@ -190,14 +207,59 @@ class BoundaryLoad:
 
     def set_factor(self, factor):
         self._factor = factor
-        self._load.value = factor * self._magnitude
-        if self._control is Control.DISPLACEMENT:   # the unknown may hold the increment
+        if self._control is Control.FORCE:
+            self._load.value = factor * self._magnitude
+        elif self._control is Control.DISPLACEMENT:   # the unknown may hold the increment
             base = self._committed_factor if self._kinematics.incremental else 0.0
             self._supports.move((factor - base) * self._magnitude)
 
     def commit(self):
         self._committed_factor = self._factor
+        if self.indirect:
+            self._committed_load = self.value
 
+    def roll_back(self):
+        if self.indirect:
+            self.set_value(self._committed_load)
+
+    # -- the traction's magnitude as a Newton unknown (indirect displacement control) -------
+    @property
+    def value(self):
+        return float(self._load.value)
+
+    def set_value(self, load):
+        self._load.value = load
+
+    def residual(self):
+        """The mean displacement's equation, k (ū − ū*) (collective)."""
+        return self._stiffness * (assemble_total(self._moved) / self.area
+                                  - self._factor * self._magnitude)
+
+    def linearise(self, b, c):
+        """∂(soil residual)/∂p = −f into b, ∂g/∂u into c (zero on held dofs); returns ∂g/∂p = 0."""
+        bcs = self._supports.bcs
+        for vector, form, scale in ((b, self._unit_load, -1.0),
+                                    (c, self._moved_derivative, self._stiffness / self.area)):
+            with vector.localForm() as local:
+                local.set(0.0)
+            fem.petsc.assemble_vector(vector, form)
+            vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            vector.scale(scale)
+            fem.petsc.set_bc(vector, bcs, scale=0.0)
+        return 0.0
+
+    def calibrate(self, tangent_solve):
+        """k = ‖f‖ / (∂ū/∂p) of the tangent that ``tangent_solve(rhs, out)`` inverts."""
+        b = fem.petsc.create_vector(self._unit_load)
+        c, z = b.duplicate(), b.duplicate()
+        self._stiffness = 1.0
+        self.linearise(b, c)
+        tangent_solve(b, z)
+        self._stiffness = b.norm() / abs(c.dot(z))
+        for vector in (b, c, z):
+            vector.destroy()
+
+    # -------------------------------------------------------------------------------------
     @property
     def area(self):
         """Area of the loaded boundary (current configuration); collective."""

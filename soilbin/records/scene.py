@@ -25,6 +25,7 @@ from .toml_in import assignment, read_toml
 class Control(enum.Enum):
     FORCE = "force"
     DISPLACEMENT = "displacement"
+    INDIRECT = "indirect_displacement"   # a traction, its magnitude set by a mean displacement
 
 
 class Direction(enum.Enum):
@@ -132,11 +133,15 @@ MAX_STEPS = 10000
 
 @dataclasses.dataclass(frozen=True)
 class Loading(Params):
-    control: Control = param(doc="force: a traction on the boundary; displacement: a prescribed displacement")
+    control: Control = param(doc="force: a traction on the boundary; displacement: a prescribed "
+                                 "displacement; indirect_displacement: a uniform traction whose "
+                                 "magnitude is solved for so that the boundary's mean displacement "
+                                 "is the load factor's (follows the load to its peak and past it)")
     boundary: str = param(doc="facet group that is loaded or displaced")
     direction: Direction = param(doc="signed axis of the load, e.g. '-z'")
     magnitude: float = param(lo=0.0, lo_open=True,
-                             doc="traction (force/area) or displacement (length) at load factor 1")
+                             doc="traction (force/area) or displacement (length; the mean one "
+                                 "under indirect_displacement) at load factor 1")
     steps: int = param(lo=1, hi=MAX_STEPS, doc="number of equal load steps to load factor 1")
     max_cuts: int = param(8, lo=0, hi=30, doc="times a failing step may be halved in a row")
     until_collapse: bool = param(False, doc="force control: the run ends normally at the soil's "
@@ -366,9 +371,15 @@ def _parse(raw, path):
     named = [(f"supports[{i}].boundary", s.boundary) for i, s in enumerate(supports)]
     named += [(f"tractions[{i}].boundary", t.boundary) for i, t in enumerate(tractions)]
     named += [(f"tool.faces[{i}]", face) for i, face in enumerate(tool.faces if tool else ())]
+    if loading.until_collapse and loading.control is not Control.FORCE:
+        raise InputError(f"loading.until_collapse = true: only under force control (loading.control "
+                         f"= {loading.control.value!r} follows the load past its limit without it)")
     if loading.boundary == TOOL:
         if tool is None:
             raise InputError("loading.boundary = 'tool' needs a [tool] table")
+        if loading.control is Control.INDIRECT:
+            raise InputError("loading.control = 'indirect_displacement' drives a traction on a "
+                             "boundary, not the tool: use displacement or force")
     else:
         named.append(("loading.boundary", loading.boundary))
     for where, name in named:
@@ -392,6 +403,12 @@ def _parse(raw, path):
     geostatic = None
     if "geostatic" in raw:
         geostatic = read_geostatic(raw["geostatic"], {m: materials[m] for m in regions.values()})
+    solver = from_table(Solver, raw.get("solver", {}), "solver")
+    if loading.control is Control.INDIRECT and solver.line_search is LineSearch.CRITICAL_POINT:
+        raise InputError("solver.line_search = 'cp' needs an energy that the Newton step lowers; "
+                         "under loading.control = 'indirect_displacement' the traction's magnitude "
+                         "is a multiplier of the displacement's equation (a saddle point, no such "
+                         "energy): use 'bt' or 'basic'")
     output = from_table(Output, raw.get("output", {}), "output")
     for i, value in enumerate(output.at):
         if not 0.0 < value <= loading.magnitude:
@@ -399,7 +416,7 @@ def _parse(raw, path):
                              f"{loading.magnitude!r}]")
     return Scene(path=path, title=title, units=units, mesh_builder=builder_name, mesh=mesh,
                  materials=materials, regions=dict(regions), supports=supports, loading=loading,
-                 analysis=analysis, solver=from_table(Solver, raw.get("solver", {}), "solver"),
+                 analysis=analysis, solver=solver,
                  output=output,
                  headline=headline, tool=tool, tractions=tractions, geostatic=geostatic)
 

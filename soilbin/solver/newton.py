@@ -91,8 +91,8 @@ class NewtonSolver:
         ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``);
         ``border``, if given, carries the extra scalar unknown (see the module docstring):
         ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d,
-        ``value``/``set_value(a)``, and ``share`` (g times it is the energy's derivative
-        in a); ``symmetric``: whether the Jacobian can be symmetric
+        ``value``/``set_value(a)``, and, for the ``cp`` line search, ``share`` (g times it
+        is the energy's derivative in a); ``symmetric``: whether the Jacobian can be symmetric
         (then ``symmetric_tangent()`` says whether it is at the current iterate)."""
         self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
@@ -160,6 +160,20 @@ class NewtonSolver:
             term.add_jacobian(A)
         A.assemble()
 
+    def tangent_solve(self, rhs, out):
+        """out = K⁻¹ rhs with the Jacobian at the current ``w`` (its constitutive update run
+        first), e.g. for a compliance."""
+        self.residual(self._b)
+        self._factorise()
+        self.linear.solve(rhs, out)
+
+    def _factorise(self):
+        """Assemble the Jacobian at the current iterate (after :meth:`residual`) and factorise
+        it (or set up the preconditioner)."""
+        with self._clock("assembly_s"):
+            self.jacobian(self.matrix)
+        self.linear.set_operator(self.matrix, self._symmetric_tangent)
+
     def _converged(self, residuals):
         if residuals[0] > 0.0 and len(residuals) == 1:
             self._force_scale = max(self._force_scale, residuals[0])
@@ -168,9 +182,7 @@ class NewtonSolver:
 
     def _newton_step(self):
         """Solve for the Newton correction into ``self._dx`` (and the border's Δa)."""
-        with self._clock("assembly_s"):
-            self.jacobian(self.matrix)
-        self.linear.set_operator(self.matrix, self._symmetric_tangent)
+        self._factorise()
         self._b.scale(-1.0)
         self.linear.solve(self._b, self._dx)
         if self._border is None:
