@@ -37,6 +37,9 @@ TINE_LEVELS = ((1.0, 1.3), (0.75, 1.3), (0.5, 1.3), (0.35, 1.3))
 
 #: The footing scene's problem on the one-hex slab it was solved on before (same solution).
 SLAB = ["mesh.dimension=3", "analysis.element=hex8-bbar"]
+#: The strip load under indirect displacement control, to 0.1 in of mean settlement.
+INDIRECT = ["loading.control=indirect_displacement", "loading.until_collapse=false",
+            "loading.magnitude=0.1"]
 #: A coarse mesh for quad9-bbar: edge cells of 0.02 in growing by 0.3 per in, up to 2 in.
 COARSE = ["mesh.edge_size=0.02", "mesh.size_growth=0.3", "mesh.far_size=2"]
 
@@ -71,6 +74,8 @@ def cases(quick):
         yield f"block, {kind} deformation", BLOCK, [f"analysis.large_deformation={large}"]
         yield (f"strip load to collapse, {kind} deformation", STRIP_LOAD,
                [f"analysis.large_deformation={large}"])
+    # the same collapse traced by the strip's mean settlement: no step is cut at the limit
+    yield "strip load, indirect displacement control to 0.1 in", STRIP_LOAD, INDIRECT
     yield "tine, refine=2", TINE, ["mesh.refine=2"]
     yield "tine, refine=3, AMG", TINE, ["mesh.refine=3", "solver.linear=amg"]
     # the 10^6-unknown tine: scripts/large_tine.py (per Newton iteration; its step does not converge)
