@@ -85,10 +85,10 @@ def test_newton_converges_quadratically_in_large_deformation():
     problem = make_problem("column-elastic-large")
     histories = []
     run_load_steps(problem, 12, 0, lambda r: histories.append(r.residuals))
-    r = histories[-1]
+    r = histories[-1]   # from the extrapolated first iterate: 4.6, 2.1e-3, 4.4e-10
     print("residual history of the last step:", " ".join(f"{x:.2e}" for x in r))
-    orders = [math.log(r[k + 1] / r[k]) / math.log(r[k] / r[k - 1]) for k in (1, 2)]
-    assert all(order > 1.8 for order in orders)
+    orders = [math.log(r[k + 1] / r[k]) / math.log(r[k] / r[k - 1]) for k in range(1, len(r) - 1)]
+    assert orders and all(order > 1.8 for order in orders)
 
 
 def committed(problem, key):

@@ -15,7 +15,22 @@ from ..forms import updated_lagrangian, virtual_work
 from ..tensors import ufl_mandel
 
 
-class SmallStrain:
+class _Extrapolated:
+    """The first iterate of a step: the last converged step's change of w scaled to this
+    step (linear extrapolation of the solution path)."""
+    _last_increment = None
+
+    def predict(self, ratio):
+        """w = w_n + ratio Δw_n, with w_n the step's start and Δw_n the last step's change."""
+        if self._last_increment is not None:
+            self._w.x.array[:] = self._w_committed.x.array + ratio * self._last_increment
+
+    def _remember_increment(self):
+        """Δw_n of the step that converges (before w_n moves on)."""
+        self._last_increment = self._w.x.array - self._w_committed.x.array
+
+
+class SmallStrain(_Extrapolated):
     """w holds the total displacement; the models integrate ε̄(w) − ε̄(w_n)."""
     incremental = False
     moves_mesh = False
@@ -24,13 +39,6 @@ class SmallStrain:
     def __init__(self, disc, w, w_committed):
         self._disc, self._w, self._w_committed = disc, w, w_committed
         self._p1 = None
-        self._last_increment = None
-
-    def predict(self, ratio):
-        """First iterate of a step: w = w_n + ratio (w_n − w_{n−1}), the last converged
-        increment scaled to this step (linear extrapolation of the solution path)."""
-        if self._last_increment is not None:
-            self._w.x.array[:] = self._w_committed.x.array + ratio * self._last_increment
 
     def strain_increment(self):
         return (ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w))
@@ -48,7 +56,7 @@ class SmallStrain:
 
     def commit(self, points):
         points.commit()
-        self._last_increment = self._w.x.array - self._w_committed.x.array
+        self._remember_increment()
         self._w_committed.x.array[:] = self._w.x.array
 
     def total_displacement(self):
@@ -74,9 +82,11 @@ class SmallStrain:
         return self._p1
 
 
-class UpdatedLagrangian:
+class UpdatedLagrangian(_Extrapolated):
     """w holds the increment from the last converged configuration Ω_n, which the mesh
-    follows (``forms.updated_lagrangian``: Hughes–Winget objective update, eq. 2.64–2.66)."""
+    follows (``forms.updated_lagrangian``: Hughes–Winget objective update, eq. 2.64–2.66);
+    a step starts from the last one's increment scaled to it (and, for mean-dilatation
+    elements, its total pressure extrapolated)."""
     incremental = True
     moves_mesh = True
     keeps_strain = True    # the linearised stress needs the increment at the points
@@ -88,9 +98,6 @@ class UpdatedLagrangian:
 
     def strain_increment(self):
         return ufl_mandel(updated_lagrangian.model_strain(self._disc, self._w))
-
-    def predict(self, ratio):
-        """No predictor: each step starts from the converged configuration (w = 0)."""
 
     def internal_force(self, points, v):
         return updated_lagrangian.internal_force(self._disc, points, self._w, v)
@@ -109,6 +116,7 @@ class UpdatedLagrangian:
         if self._rotation is None:
             self._rotation = points.expression(updated_lagrangian.rotation(self._disc, self._w))
         points.commit(points.evaluate(self._rotation).reshape(-1, 3, 3))
+        self._remember_increment()
         self._motion.advance()
         self._w_committed.x.array[:] = self._w.x.array
         points.update()   # the committed state: σ_{n+1} on the moved mesh
