@@ -152,7 +152,8 @@ def _progress(record):
           f"displacement {record.displacement:11.5g}  force {record.force:11.5g}"
           f"{columns}  Newton {record.newton_iterations:2d}"
           + (f"  cuts {record.cuts}" if record.cuts else "")
-          + f"  {record.wall_s:7.2f} s", file=sys.stderr, flush=True)
+          + f"  {record.wall_s:7.2f} s"
+          + (f"  (last cut: {record.cut_reason})" if record.cuts else ""), file=sys.stderr, flush=True)
 
 
 def _run(args):

@@ -67,6 +67,7 @@ class StepRecord:
     wall_s: float
     residuals: tuple
     columns: dict = dataclasses.field(default_factory=dict)
+    cut_reason: str = ""    # why the last attempt of this step that was cut failed
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,7 +83,8 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
     """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors);
     ``limit(records)``, if given, returns why the run ends after the last record, or None."""
     nominal = 1.0 / steps
-    level, factor, cuts, failed = 0, 0.0, 0, 0      # increment = nominal / 2**level
+    level, factor = 0, 0.0      # increment = nominal / 2**level
+    cuts, failed, reason = 0, 0, ""
     records, start = [], clock()
     while factor < 1.0 - 1e-12:
         increment = min(nominal / 2**level, 1.0 - factor)
@@ -95,6 +97,7 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
         except ConvergenceError as err:
             problem.roll_back()
             failed += getattr(err, "iterations", 0)
+            reason = str(err)
             if level == max_cuts:
                 return StepperResult(tuple(records), False,
                                      f"step to load factor {factor + increment:.6g} failed with the "
@@ -107,15 +110,15 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
         seen = problem.observe()
         record = StepRecord(len(records) + 1, factor, seen.displacement, seen.force,
                             result.iterations, cuts, failed, clock() - start, result.residuals,
-                            seen.columns)
+                            seen.columns, reason)
         records.append(record)
         on_step(record)
-        reason = limit(records) if limit is not None else None
-        if reason:
-            return StepperResult(tuple(records), False, reason, limit_reached=True)
+        ended = limit(records) if limit is not None else None
+        if ended:
+            return StepperResult(tuple(records), False, ended, limit_reached=True)
         if result.iterations <= EASY:
             level = max(level - 1, 0)
         elif result.iterations >= HARD:
             level = min(level + 1, max_cuts)
-        cuts = failed = 0
+        cuts, failed, reason = 0, 0, ""
     return StepperResult(tuple(records), True, "")
