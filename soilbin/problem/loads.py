@@ -171,7 +171,9 @@ class BoundaryLoad:
     :class:`~soilbin.solver.newton.NewtonSolver`'s border: its equation is written in force
     units, g = k (ū − ū*), k = ‖f‖ / (∂ū/∂p) with f the nodal load of p = 1 and ∂ū/∂p the
     mean displacement per unit p of the first tangent (:meth:`calibrate`), so that the
-    Newton residual's norm weighs it as the load that would close it."""
+    Newton residual's norm weighs it as the load that would close it. In large deformation
+    ū is the mean over the boundary as it was at the step's start (the curve's, over the
+    moved boundary, differs by about the strain times the step's settlement)."""
     #: Per-step values beside displacement and force (see :meth:`observe`).
     columns = ("pressure",)
 
