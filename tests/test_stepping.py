@@ -59,6 +59,7 @@ def test_increment_grows_back_after_a_cut():
     result = run_load_steps(Hiccup(limit=9.0), steps=2, max_cuts=3, on_step=lambda r: None)
     assert [r.load_factor for r in result.steps] == [0.5, 0.75, 1.0]
     assert [r.cuts for r in result.steps] == [0, 1, 0]
+    assert [r.cut_reason for r in result.steps] == ["", "hiccup", ""]   # for the progress line
 
 
 def test_steps_land_on_the_stated_load_factors():
