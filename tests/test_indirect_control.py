@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from conftest import SCENES
+from conftest import SCENES, make_problem
 from soilbin.errors import InputError
 from soilbin.records.scene import load_scene
 
@@ -54,3 +54,13 @@ def test_what_indirect_control_refuses(overrides, message):
 def test_a_tool_is_not_driven_by_indirect_control():
     with pytest.raises(InputError, match="drives a traction on a boundary, not the tool"):
         load_scene(SCENES / "tine-2in-90deg.toml", ["loading.control=indirect_displacement"])
+
+
+def test_a_held_boundary_is_refused_with_its_name(tmp_path):
+    """A support holding the loaded boundary along the load leaves the traction nothing to
+    move: a one-line input error, not a division by zero."""
+    scene = tmp_path / "held.toml"
+    scene.write_text((SCENES / "strip-load-von-mises.toml").read_text()
+                     + '\n[[supports]]\nboundary = "footing"\nfix = ["z"]\n')
+    with pytest.raises(InputError, match="a traction on 'footing' does not move it"):
+        make_problem(scene, *INDIRECT, "mesh.edge_size=0.1")

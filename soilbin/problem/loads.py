@@ -22,6 +22,7 @@ from petsc4py import PETSc
 from dolfinx import fem, la
 import dolfinx.fem.petsc  # noqa: F401
 
+from ..errors import InputError
 from ..records.scene import TOOL, Control
 from ..solver.stepping import Observation
 from ..tensors import ufl_from_mandel
@@ -181,6 +182,7 @@ class BoundaryLoad:
         loading = scene.loading
         mesh = disc.mesh
         self._control, self._magnitude = loading.control, loading.magnitude
+        self._boundary = loading.boundary
         self._supports, self._kinematics = supports, kinematics
         self.indirect = loading.control is Control.INDIRECT
         self.direction = frame.vector(loading.direction)
@@ -257,9 +259,14 @@ class BoundaryLoad:
         self._stiffness = 1.0
         self.linearise(b, c)
         tangent_solve(b, z)
-        self._stiffness = b.norm() / abs(c.dot(z))
+        compliance, norm = abs(c.dot(z)), b.norm()
         for vector in (b, c, z):
             vector.destroy()
+        if not compliance > 0.0:
+            raise InputError(f"loading.control = 'indirect_displacement': a traction on "
+                             f"{self._boundary!r} does not move it along loading.direction (the "
+                             "supports hold it there), so its mean displacement cannot set it")
+        self._stiffness = norm / compliance
 
     # -------------------------------------------------------------------------------------
     @property
