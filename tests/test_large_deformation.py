@@ -92,6 +92,18 @@ def test_newton_converges_quadratically_in_large_deformation():
     assert orders and all(order > 1.8 for order in orders)
 
 
+def test_a_mean_dilatation_step_starts_from_the_extrapolated_pressure_too():
+    """quad4-bbar in large deformation, elastic steps of 20 psi: the second starts from the
+    first's increment scaled to it, its total pressure extrapolated with it (leaving the
+    pressure at the last step's doubled the first residual: 5.6 -> 11.2; measured 5.8e-3)."""
+    problem = make_problem("strip-load-von-mises", "analysis.large_deformation=true",
+                           "loading.until_collapse=false", "loading.magnitude=40",
+                           "loading.steps=2")
+    histories = []
+    run_load_steps(problem, 2, 0, lambda r: histories.append(r.residuals))
+    assert histories[1][0] < 1e-2 * histories[0][0]
+
+
 def committed(problem, key):
     return problem.points.committed["soil"][key].copy()
 
