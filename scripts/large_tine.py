@@ -17,6 +17,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from mpi4py import MPI
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -24,16 +25,29 @@ sys.path.insert(0, str(ROOT))
 
 from soilbin.errors import ConvergenceError  # noqa: E402
 from soilbin.meshes import BUILDERS  # noqa: E402
+from soilbin.models.base import ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER  # noqa: E402
 from soilbin.problem import SoilProblem  # noqa: E402
 from soilbin.records.scene import load_scene  # noqa: E402
 from soilbin.solver.newton import NewtonSolver  # noqa: E402
 
 DEFAULTS = ["solver.linear=amg", "loading.steps=1", "loading.magnitude=0.0125"]
+MODES = dict(elastic=ELASTIC, failure=FAILURE, apex=APEX, cutoff=CUTOFF, cap=CAP,
+             cap_corner=CAP_CORNER)
 
 
 def memory_mb(comm):
     """Peak resident set of all ranks together [MB]."""
     return comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+
+
+def modes(problem):
+    """The return mode (``yield_state``) of every local point at the last update."""
+    points = problem.points
+    out = np.full(sum(len(idx) for idx in points.index.values()), -1.0)
+    for name, idx in points.index.items():
+        if "yield_state" in points.trial[name]:
+            out[idx] = points.trial[name]["yield_state"]
+    return out
 
 
 def main():
@@ -55,19 +69,31 @@ def main():
     newton, iterations = problem.newton, []
     stats = newton.linear.stats
     step, residual = NewtonSolver._newton_step, NewtonSolver.residual
-    clock = {"t": time.process_time(), "krylov": 0}
+    set_iterate = NewtonSolver._set_iterate
+    clock = {"t": time.process_time(), "krylov": 0, "modes": modes(problem), "steps": []}
 
     def logged_step(self):
-        """The Newton correction; logs the iteration that ends with it."""
+        """The Newton correction; logs the iteration that ends with it: its CPU time,
+        Krylov iterations, memory, the line search's trial steps along the last
+        correction, the points whose return mode changed since the last correction
+        (summed over the ranks) and how many points are in each mode."""
         da = step(self)
-        now = time.process_time()
+        now, now_modes = time.process_time(), modes(problem)
         row = dict(cpu_s=now - clock["t"], krylov=stats["krylov_iterations"] - clock["krylov"],
-                   memory_MB=memory_mb(comm))
-        clock.update(t=now, krylov=stats["krylov_iterations"])
+                   memory_MB=memory_mb(comm), line_search=clock["steps"],
+                   mode_changes=comm.allreduce(int(np.sum(now_modes != clock["modes"]))),
+                   modes={name: comm.allreduce(int(np.sum(now_modes == code)))
+                          for name, code in MODES.items()})
+        clock.update(t=now, krylov=stats["krylov_iterations"], modes=now_modes, steps=[])
         iterations.append(row)
         say(f"Newton {len(iterations):3d}  {row['cpu_s']:8.1f} CPU s  Krylov {row['krylov']:4d}  "
-            f"memory {row['memory_MB']:8.0f} MB", flush=True)
+            f"memory {row['memory_MB']:8.0f} MB  steps {' '.join(f'{s:.3g}' for s in row['line_search'])}"
+            f"  changed {row['mode_changes']}  {row['modes']}", flush=True)
         return da
+
+    def logged_set_iterate(self, x, a, dx, da, length):
+        clock["steps"].append(length)
+        set_iterate(self, x, a, dx, da, length)
 
     def logged_residual(self, b):
         norm = residual(self, b)
@@ -75,6 +101,7 @@ def main():
         return norm
 
     NewtonSolver._newton_step, NewtonSolver.residual = logged_step, logged_residual
+    NewtonSolver._set_iterate = logged_set_iterate
     problem.set_load_factor(1.0)
     try:
         result = problem.solve()
