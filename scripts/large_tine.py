@@ -23,7 +23,7 @@ from mpi4py import MPI
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from soilbin.errors import ConvergenceError  # noqa: E402
+from soilbin.errors import ConvergenceError, ReturnMapError  # noqa: E402
 from soilbin.meshes import BUILDERS  # noqa: E402
 from soilbin.models.base import ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER  # noqa: E402
 from soilbin.problem import SoilProblem  # noqa: E402
@@ -96,7 +96,11 @@ def main():
         set_iterate(self, x, a, dx, da, length)
 
     def logged_residual(self, b):
-        norm = residual(self, b)
+        try:
+            norm = residual(self, b)
+        except ReturnMapError as err:   # the line search takes it as an infinite residual
+            say(f"    |R| = inf ({err})", flush=True)
+            raise
         say(f"    |R| = {norm:.4e}", flush=True)
         return norm
 
