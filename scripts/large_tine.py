@@ -3,12 +3,19 @@
     OMP_NUM_THREADS=1 python scripts/large_tine.py --set mesh.refine=4 [--set ...]
     OMP_NUM_THREADS=1 mpirun -n 2 python scripts/large_tine.py --set mesh.refine=4
 
-One load step of the default tine scene (1/8 of its travel, the step out of the
-K0 state, the hardest of the run) with GMRES + GAMG (``solver.linear = "amg"``)
-unless overridden (``--set solver.linear=blr``: GMRES + block low-rank LU). Prints a line per Newton iteration (CPU seconds of the
-iteration on rank 0, its Krylov iterations, the residual, the peak resident
-memory summed over the ranks) and writes them with the set-up's to
-``--out`` (JSON), for the README's large-mesh row.
+One load step of the default tine scene (by default 1/8 of its travel,
+``loading.magnitude = 0.0125``: the step out of the K0 state, the hardest of
+the run) with GMRES + GAMG (``solver.linear = "amg"``) unless overridden
+(``--set solver.linear=blr``: GMRES + block low-rank LU). On the fine meshes
+that step does not converge; a smaller one does (refine 2:
+``--set loading.magnitude=0.003125``, 1/32 of the travel; README, *The large
+tine*). Prints a line per Newton iteration (CPU seconds of the iteration on
+rank 0, its Krylov iterations, the peak resident memory summed over the ranks,
+the line search's trial step lengths along the previous correction, the
+points whose return mode changed since the previous iteration and the points
+in each mode, summed over the ranks), every residual norm (a failed local
+return too, with its message), and writes them with the set-up's to ``--out``
+(JSON), for the README's large-mesh row.
 """
 import argparse
 import json
