@@ -32,6 +32,7 @@ sys.path.insert(0, str(ROOT))
 
 from soilbin.errors import ConvergenceError, ReturnMapError  # noqa: E402
 from soilbin.meshes import BUILDERS  # noqa: E402
+from soilbin.models.cap import ModifiedCap  # noqa: E402
 from soilbin.models.base import ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER  # noqa: E402
 from soilbin.problem import SoilProblem  # noqa: E402
 from soilbin.records.scene import load_scene  # noqa: E402
@@ -57,11 +58,32 @@ def modes(problem):
     return out
 
 
+def stiffen_apex(alpha):
+    """Add ``alpha`` times the elastic stiffness to the modified cap's tangent at the points
+    at the apex, the stress untouched (the converged state is the same, the Newton matrix
+    differs). With A = C the apex is zero stress and its tangent is zero, so a cell whose
+    points are all there has no stiffness, and a cluster of them near the free surface makes
+    the Newton matrix singular (README, *The large tine*)."""
+    integrate = ModifiedCap.integrate
+
+    def stiffened(self, deps, state, guess=None):
+        sigma, tangent, new_state = integrate(self, deps, state, guess)
+        tangent[new_state["yield_state"] == APEX] += alpha * self.stiffness
+        return sigma, tangent, new_state
+
+    ModifiedCap.integrate = stiffened
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "large-tine" / "result.json")
+    parser.add_argument("--apex-stiffness", type=float, default=0.0, metavar="ALPHA",
+                        help="an experiment: add ALPHA times the elastic stiffness to the tangent "
+                             "at the modified cap's points at the apex (their own is zero)")
     args = parser.parse_args()
+    if args.apex_stiffness:
+        stiffen_apex(args.apex_stiffness)
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *a, **k: None)
 
