@@ -189,6 +189,9 @@ def main():
     if args.case:
         print(json.dumps(run_case(args.case[0], args.case[1:])))
         return
+    if args.update and not (args.out / "results.json").is_file():
+        sys.exit(f"--update keeps the other cases of {args.out / 'results.json'}, which does "
+                 f"not exist: run without --update first (or give its --out)")
     results = []
     for name, scene, overrides in cases(args.quick):
         if args.only and not any(text in name for text in args.only):
