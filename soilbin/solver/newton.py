@@ -110,6 +110,7 @@ class NewtonSolver:
         self._gap = w.vector.duplicate()
         self._force_scale = 0.0
         self._symmetric_tangent = symmetric_tangent
+        self._comm = comm
         self._displacement_rows = disc.displacement_rows()
         self._diagonal = self.matrix.createVecLeft()
         self._first_diagonal = None
@@ -183,7 +184,7 @@ class NewtonSolver:
             self._first_diagonal = diagonal[rows].copy()
         first = self._first_diagonal
         spring = np.where(np.abs(diagonal[rows]) <= NO_STIFFNESS * np.abs(first), first, 0.0)
-        if not self._w.function_space.mesh.comm.allreduce(np.count_nonzero(spring)):
+        if not self._comm.allreduce(np.count_nonzero(spring)):
             return
         self._diagonal.zeroEntries()
         self._diagonal.array[rows] = spring
