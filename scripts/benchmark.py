@@ -113,7 +113,8 @@ def run_case(scene_name, overrides):
     scene = load_scene(ROOT / "scenes" / f"{scene_name}.toml", overrides)
     problem = SoilProblem(scene, BUILDERS[scene.mesh_builder].build(scene.mesh, MPI.COMM_WORLD))
     setup = time.process_time() - start
-    result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None)
+    result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None,
+                            first_cuts=scene.loading.first_cuts)
     solve = time.process_time() - start - setup
     newton, linear = problem.newton.stats, problem.newton.linear.stats
     kind, value = result_value(scene, result.steps) if result.steps else ("", None)

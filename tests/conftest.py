@@ -59,7 +59,8 @@ def solve_file():
     def _solve(path, *overrides):
         problem = make_problem(path, *overrides)
         steps = problem.scene.loading
-        result = run_load_steps(problem, steps.steps, steps.max_cuts, lambda r: None)
+        result = run_load_steps(problem, steps.steps, steps.max_cuts, lambda r: None,
+                                first_cuts=steps.first_cuts)
         rows = [{"force": r.force, "displacement": r.displacement, "load_factor": r.load_factor}
                 for r in result.steps]
         return result, rows, problem

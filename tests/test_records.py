@@ -118,3 +118,10 @@ def test_a_headline_is_read_off_what_the_scene_drives(scene, headline, driven):
     """A loaded boundary has a pressure and no lift, a tool a lift and no pressure."""
     with pytest.raises(InputError, match=f"headline.x: {headline} is not read off {driven}"):
         load_scene(SCENES / f"{scene}.toml", [f"headline.x={headline}"])
+
+
+def test_the_first_step_cannot_start_below_the_smallest_increment():
+    with pytest.raises(InputError, match=re.escape(
+            "loading.first_cuts: 4 is more than max_cuts (3), the smallest increment allowed")):
+        load_scene(SCENES / "strip-footing-von-mises.toml",
+                   ["loading.first_cuts=4", "loading.max_cuts=3"])

@@ -29,8 +29,9 @@ class Scripted:
         return Observation(self.committed, 0.0)
 
 
-def factors(script, steps=4, max_cuts=3):
-    result = run_load_steps(Scripted(script), steps, max_cuts, lambda r: None)
+def factors(script, steps=4, max_cuts=3, first_cuts=0):
+    result = run_load_steps(Scripted(script), steps, max_cuts, lambda r: None,
+                            first_cuts=first_cuts)
     return [r.load_factor for r in result.steps], result
 
 
@@ -42,6 +43,12 @@ def test_a_hard_step_halves_the_next_and_easy_steps_grow_back():
 def test_middling_steps_keep_the_increment():
     seen, _ = factors([HARD, EASY + 1, EASY + 1, EASY, EASY, EASY, EASY])
     assert seen == [0.25, 0.375, 0.5, 0.625, 0.875, 1.0]
+
+
+def test_the_first_step_starts_cut_and_easy_steps_grow_back():
+    seen, result = factors([EASY] * 6, first_cuts=2)
+    assert seen == [0.0625, 0.1875, 0.4375, 0.6875, 0.9375, 1.0]
+    assert [r.cuts for r in result.steps] == [0] * 6
 
 
 def test_cut_attempts_are_counted_on_the_step_that_converges():

@@ -138,7 +138,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     interrupted = None
     try:
         result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step, stops=stops,
-                                limit=collapse_limit(scene))
+                                limit=collapse_limit(scene), first_cuts=loading.first_cuts)
     except interrupt.Interrupted as signal:
         interrupted = signal
         result = StepperResult(tuple(folder.records), False,

@@ -144,10 +144,19 @@ class Loading(Params):
                                  "under indirect_displacement) at load factor 1")
     steps: int = param(lo=1, hi=MAX_STEPS, doc="number of equal load steps to load factor 1")
     max_cuts: int = param(8, lo=0, hi=30, doc="times a failing step may be halved in a row")
+    first_cuts: int = param(0, lo=0, hi=30, doc="times the first step is halved before it is "
+                                               "tried (the next ones double back after easy "
+                                               "steps); at most max_cuts")
     until_collapse: bool = param(False, doc="force control: the run ends normally at the soil's "
                                             "limit, the first step whose displacement per unit load "
                                             "is 100 times the first step's, or a step that cannot "
                                             "be converged")
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.first_cuts > self.max_cuts:
+            raise InputError(f"first_cuts: {self.first_cuts} is more than max_cuts "
+                             f"({self.max_cuts}), the smallest increment allowed")
 
 
 TOOL = "tool"   # the loading boundary name that means the rigid tool

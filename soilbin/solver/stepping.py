@@ -2,7 +2,8 @@
 
 The load factor goes from 0 to 1 in steps of at most the scene's nominal
 increment 1/steps, landing exactly on any stated load factors (``stops``) on
-the way. A step whose Newton solve fails is rolled back and
+the way; the first step is the nominal increment halved ``first_cuts`` times.
+A step whose Newton solve fails is rolled back and
 halved; the increment never goes below the nominal one over 2**max_cuts,
 which ends the run (under force control, at the collapse load to that
 resolution). The next increment follows the last step's Newton iterations:
@@ -79,11 +80,11 @@ class StepperResult:
 
 
 def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter,
-                   stops=(), limit=None):
+                   stops=(), limit=None, first_cuts=0):
     """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors);
     ``limit(records)``, if given, returns why the run ends after the last record, or None."""
     nominal = 1.0 / steps
-    level, factor = 0, 0.0      # increment = nominal / 2**level
+    level, factor = first_cuts, 0.0      # increment = nominal / 2**level
     cuts, failed, reason = 0, 0, ""
     records, start = [], clock()
     while factor < 1.0 - 1e-12:
