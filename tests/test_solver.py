@@ -131,22 +131,3 @@ def test_the_critical_point_line_search_stops_where_the_energy_is_stationary():
     assert abs(g) <= CP_TOLERANCE * abs(g0) or (g < 0.0 and took_full_step)
     problem.roll_back()
     assert problem.solve().iterations <= 25
-
-
-def test_soil_pulled_apart_leans_on_springs_in_the_newton_matrix():
-    """Cohesionless soil in hydrostatic tension returns to the cone's apex, zero stress with
-    a zero tangent at every point: no unknown has stiffness, and the Newton matrix holds
-    each one's first (elastic) diagonal instead, a regular matrix; the stress stays zero."""
-    problem = make_problem("block-drucker-prager", "materials.soil.c=0.0")
-    newton, A = problem.newton, problem.newton.matrix
-    newton.residual(newton._b)          # the committed state: the elastic tangent
-    newton.jacobian(A)
-    elastic = A.copy().convert("dense").getDenseArray()
-    problem.w.interpolate(lambda x: 1e-3 * x)
-    newton.residual(newton._b)
-    assert np.abs(problem.points.stress.x.array).max() == 0.0
-    assert np.abs(problem.points.tangent.x.array).max() == 0.0
-    newton.jacobian(A)
-    apex = A.copy().convert("dense").getDenseArray()
-    assert apex == pytest.approx(np.diag(np.diag(elastic)), rel=1e-12, abs=0.0)
-    assert np.all(np.diag(apex) > 0.0)

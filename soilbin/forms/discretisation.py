@@ -108,16 +108,6 @@ class Discretisation:
         return ufl.Measure("ds", domain=self.mesh, subdomain_data=facet_tags,
                            metadata={"quadrature_degree": self.element.quadrature_degree})
 
-    def displacement_rows(self):
-        """Local indices of the owned displacement unknowns in the unknown's vector."""
-        space = self.space
-        owned = space.dofmap.index_map.size_local * space.dofmap.index_map_bs
-        if not self.element.mixed:
-            return np.arange(owned, dtype=np.int32)
-        rows = np.unique(np.concatenate([space.sub(0).sub(i).dofmap.list.array
-                                         for i in range(self.dimension)]))
-        return rows[rows < owned].astype(np.int32)
-
     def displacement(self, w):
         """Displacement part (world components, three) of a function, trial or test function
         of ``space``."""

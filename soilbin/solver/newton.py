@@ -60,11 +60,6 @@ ARMIJO = 1e-4
 #: (the tine's first step out of K0: 26 Newton iterations with 6 trials and 0.2; with
 #: 4 trials, 33 with 0.5 and 46 with Crisfield's 0.8).
 CP_TRIALS, CP_TOLERANCE = 6, 0.2
-#: A free displacement unknown whose Newton-matrix diagonal is at most this fraction of its
-#: first one (the elastic stiffness) has no stiffness: every point about its node is at a
-#: zero-stress vertex with a zero tangent (the modified cap's apex with A = C, the cone's
-#: apex without cohesion), soil pulled apart, and the matrix is singular.
-NO_STIFFNESS = 1e-12
 #: A residual this many times the step's first ends the step (it is cut).
 DIVERGENCE = 10.0
 #: Iterations without a new smallest residual that end the step.
@@ -110,10 +105,6 @@ class NewtonSolver:
         self._gap = w.vector.duplicate()
         self._force_scale = 0.0
         self._symmetric_tangent = symmetric_tangent
-        self._comm = comm
-        self._displacement_rows = disc.displacement_rows()
-        self._diagonal = self.matrix.createVecLeft()
-        self._first_diagonal = None
         n_dofs = w.vector.getSize()
         self.linear = LinearSolver(comm, options.linear, disc, n_dofs,
                                    symmetric, prefix)
@@ -167,28 +158,6 @@ class NewtonSolver:
             A.assemble(PETSc.Mat.AssemblyType.FLUSH)
         for term in self._nodal_terms:
             term.add_jacobian(A)
-        A.assemble()
-        self._support_unstiffened(A)
-
-    def _support_unstiffened(self, A):
-        """Give the displacement unknowns without stiffness (``NO_STIFFNESS``) their first
-        diagonal, a spring to the ground, in the Newton matrix only (the residual is
-        untouched). Soil pulled apart under gravity is not in equilibrium, so a converged
-        state has none of them and keeps its quadratic convergence; a point at the apex
-        whose node other points hold keeps its zero tangent (README *How it works*: a tenth
-        of the elastic stiffness at every point at the apex instead took `make run` from
-        67 to 771 Newton iterations)."""
-        diagonal = A.getDiagonal(self._diagonal).array
-        rows = self._displacement_rows
-        if self._first_diagonal is None:
-            self._first_diagonal = diagonal[rows].copy()
-        first = self._first_diagonal
-        spring = np.where(np.abs(diagonal[rows]) <= NO_STIFFNESS * np.abs(first), first, 0.0)
-        if not self._comm.allreduce(np.count_nonzero(spring)):
-            return
-        self._diagonal.zeroEntries()
-        self._diagonal.array[rows] = spring
-        A.setDiagonal(self._diagonal, addv=PETSc.InsertMode.ADD_VALUES)
         A.assemble()
 
     def tangent_solve(self, rhs, out):
