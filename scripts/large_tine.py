@@ -62,9 +62,8 @@ def stiffen_apex(alpha):
     """Add ``alpha`` times the elastic stiffness to the modified cap's tangent at the points
     at the apex, the stress untouched (the converged state is the same, the Newton matrix
     differs). With A = C the apex is zero stress and its tangent is zero, so a cell whose
-    points are all there has no stiffness, and a cluster of them near the free surface made
-    the Newton matrix singular before the solver gave such unknowns springs (README, *The
-    large tine*); this stiffens every point at the apex instead, on top of the springs."""
+    points are all there has no stiffness, and a cluster of them near the free surface makes
+    the Newton matrix singular (README, *The large tine*)."""
     integrate = ModifiedCap.integrate
 
     def stiffened(self, deps, state, guess=None):

@@ -5,10 +5,11 @@ increment 1/steps, landing exactly on any stated load factors (``stops``) on
 the way; the first step is the nominal increment halved ``first_cuts`` times.
 A step whose Newton solve fails is rolled back and halved; the increment
 never goes below the nominal one over 2**max_cuts, which ends the run (under
-force control, at the collapse load to that resolution). The next increment follows the last step's Newton iterations:
-it doubles (back toward the nominal one) after an easy step (at most
-``EASY`` iterations), halves after a hard one (at least ``HARD``, before the
-next one fails), and stays otherwise. Every converged step is handed to
+force control, at the collapse load to that resolution). The next increment
+follows the last step's Newton iterations: it doubles (back toward the
+nominal one) after an easy step (at most ``EASY`` iterations), halves after
+a hard one (at least ``HARD``, before the next one fails), and stays
+otherwise. Every converged step is handed to
 ``on_step`` at once, so a run that stops early leaves all its converged
 steps behind. A ``limit`` callback, asked after every converged step, may end
 the run early with its message (under force control: the soil's limit is
