@@ -6,7 +6,7 @@
 One load step of the default tine scene (by default 1/8 of its travel,
 ``loading.magnitude = 0.0125``: the step out of the K0 state, the hardest of
 the run) with GMRES + GAMG (``solver.linear = "amg"``) unless overridden
-(``--set solver.linear=blr``: GMRES + block low-rank LU). On the fine meshes
+(``--set solver.linear=blr``: MUMPS's block low-rank LU). On the fine meshes
 that step does not converge; a smaller one does (refine 2:
 ``--set loading.magnitude=0.003125``, 1/32 of the travel; README, *The large
 tine*). Prints a line per Newton iteration (CPU seconds of the iteration on

@@ -54,7 +54,7 @@ class LinearSolverKind(enum.Enum):
     LU = "lu"              # MUMPS LU
     CHOLESKY = "cholesky"  # MUMPS LDLT of the condensed system
     AMG = "amg"            # CG or GMRES with GAMG on the condensed system
-    BLR = "blr"            # GMRES with a MUMPS block low-rank LU of the condensed system
+    BLR = "blr"            # MUMPS block low-rank LU of the condensed system
 
 
 class Field(enum.Enum):
@@ -213,7 +213,7 @@ class Solver(Params):
                                         "norm) or cp (the energy's stationary point along the step)")
     linear: LinearSolverKind = param(LinearSolverKind.AUTO,
                                      doc="linear solver: auto, lu, cholesky (LDLT), amg or blr "
-                                         "(GMRES + block low-rank LU)")
+                                         "(block low-rank LU)")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -15,15 +15,17 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
   the rigid-body modes as near-nullspace. ``hex8-bbar`` systems are
   condensed first (``condensation.CellCondensation``: the cell dilatation
   and pressure eliminated exactly), since AMG needs a displacement system.
-* ``blr``: GMRES preconditioned by MUMPS's block low-rank LU of the same
-  (condensed) system: the off-diagonal blocks of the fronts compressed to
-  ``BLR_TOLERANCE`` (MUMPS ICNTL(35), CNTL(7); Amestoy et al. 2015, SIAM J.
-  Sci. Comput. 37(3):A1451). A factorisation per iterate: the factor of one
-  iterate kept for the next took 200 GMRES iterations without converging
-  (tine, refine 2). GMRES iterations in the tine's first Newton iterations:
-  refine 3, 9, 10, 8; refine 4 (10⁶ unknowns), 11, 15, then more than 170
-  (GAMG: 92, 751). On refine 4 it peaks at 17 GB; MUMPS estimates the
-  full-rank LU's factorisation alone at 24.6 GB.
+* ``blr``: MUMPS's block low-rank LU of the same (condensed) system, the
+  off-diagonal blocks of the fronts compressed to ``BLR_TOLERANCE`` (MUMPS
+  ICNTL(35), CNTL(7); Amestoy et al. 2015, SIAM J. Sci. Comput.
+  37(3):A1451), used as the solver: each Newton correction is inexact by
+  about that tolerance, which Newton absorbs. A factorisation per iterate.
+  GMRES around it (the factor as preconditioner) stalled where the Newton
+  matrix is singular (a cluster of points at a vertex with a zero tangent:
+  GMRES passed 170 iterations on the tine's refine 4), where the factor,
+  like LU, sets the components of its null pivots to zero. On refine 4
+  (10⁶ unknowns) it peaks at 17 GB; MUMPS estimates the full-rank LU's
+  factorisation alone at 24.6 GB.
 
 Both factorisations use the PORD ordering above ``PORD_DOFS`` unknowns
 (measured faster than MUMPS's automatic choice on the footing and the tine,
@@ -49,8 +51,7 @@ KRYLOV_RTOL = 1e-10
 #: Added to every diagonal entry SOR divides by on the multigrid levels (a stiffness
 #: diagonal is 1e2-1e6 in the scenes' units; the zero rows' right-hand sides are zero).
 SOR_SHIFT = 1e-10
-#: BLR compression tolerance, relative (MUMPS CNTL(7)); on the tine, refine 3: 1e-3 took
-#: 24-32 GMRES iterations (1e-4: 8-10) for 30% less factorisation time, 8% less in all.
+#: BLR compression tolerance, relative (MUMPS CNTL(7)), about the inexactness of a correction.
 BLR_TOLERANCE = 1e-4
 
 
@@ -105,8 +106,7 @@ class LinearSolver:
         bbar = disc.element.mixed and disc.element.degree == 1
         if kind is LinearSolverKind.BLR:   # any system factorises; B-bar's condensed is smaller
             self._condensed = CellCondensation(disc) if bbar else None
-            _mumps(self._ksp, prefix + "blr_", "lu", n_dofs, ksp_type="gmres",
-                   ksp_rtol=KRYLOV_RTOL, ksp_max_it=200, ksp_gmres_restart=200,
+            _mumps(self._ksp, prefix + "blr_", "lu", n_dofs,
                    mat_mumps_icntl_35=1, mat_mumps_cntl_7=BLR_TOLERANCE)
             return
         if disc.element.mixed and not bbar:
@@ -144,8 +144,8 @@ class LinearSolver:
                 return "MUMPS LU (the Jacobian is unsymmetric)"
             return "MUMPS LDLT" + (f", LU for {lu} of {every} iterates (unsymmetric)" if lu else "")
         if self.kind is LinearSolverKind.BLR:
-            return "GMRES + MUMPS BLR LU" + (f" ({self._condensed.description})"
-                                             if self._condensed is not None else "")
+            return "MUMPS BLR LU" + (f" ({self._condensed.description})"
+                                     if self._condensed is not None else "")
         return f"GMRES + GAMG ({self._condensed.description})"
 
     def set_operator(self, A, symmetric_tangent):
@@ -182,7 +182,7 @@ class LinearSolver:
             raise LinearSolveError(f"the linear solve failed (PETSc error {err.ierr})") from None
         reason = ksp.getConvergedReason()
         self.stats["solves"] += 1
-        if self.kind in (LinearSolverKind.AMG, LinearSolverKind.BLR):
+        if self.kind is LinearSolverKind.AMG:
             self.stats["krylov_iterations"] += ksp.getIterationNumber()
         self.stats["solve_s"] += time.process_time() - start
         if reason < 0:
