@@ -22,7 +22,7 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
   about that tolerance, which Newton absorbs. A factorisation per iterate.
   GMRES around it (the factor as preconditioner) stalled where the Newton
   matrix is singular (a cluster of points at a vertex with a zero tangent:
-  GMRES passed 170 iterations on the tine's refine 4), where the factor,
+  more than 170 GMRES iterations on the tine's refine 4); the factor alone,
   like LU, sets the components of its null pivots to zero. On refine 4
   (10⁶ unknowns) it peaks at 17 GB; MUMPS estimates the full-rank LU's
   factorisation alone at 24.6 GB.
