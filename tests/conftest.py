@@ -51,6 +51,39 @@ def make_problem(scene, *overrides):
     return SoilProblem(loaded, BUILDERS[loaded.mesh_builder].build(loaded.mesh, MPI.COMM_WORLD))
 
 
+def jacobian_error(problem, seed=0, amplitude=0.01):
+    """Relative error of J dx against central differences of the residual, at a
+    random increment of this amplitude (BC rows excluded), the difference step 1e-5 of it
+    (a point within it of a kink between return modes would spoil the difference); and the
+    points' trial states."""
+    newton, w = problem.newton, problem.w
+    rng = np.random.default_rng(seed)
+    fixed = np.concatenate([bc.dof_indices()[0] for bc in problem.bcs])
+    w.x.array[:] = amplitude * rng.standard_normal(len(w.x.array))
+    w.x.array[fixed] = 0.0
+
+    def residual(x):
+        x.copy(w.vector)
+        w.x.scatter_forward()
+        b = x.duplicate()
+        newton.residual(b)
+        return b.array.copy()
+
+    x0 = w.vector.copy()
+    residual(x0)
+    newton.jacobian(newton.matrix)
+    dx = x0.duplicate()
+    dx.array[:] = rng.standard_normal(len(dx.array))
+    dx.array[fixed] = 0.0
+    Jdx = newton.matrix.createVecLeft()
+    newton.matrix.mult(dx, Jdx)
+    h = 1e-5 * amplitude
+    fd = (residual(x0 + h * dx) - residual(x0 - h * dx)) / (2 * h)
+    exact = Jdx.array.copy()
+    fd[fixed] = exact[fixed] = 0.0
+    return np.linalg.norm(fd - exact) / np.linalg.norm(exact), problem.points.trial
+
+
 @pytest.fixture
 def solve_file():
     """solve_file(path, *overrides) -> (summary, curve rows, problem), serial, in this process."""

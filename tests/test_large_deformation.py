@@ -9,7 +9,7 @@ from soilbin.app.run import collapse_limit, collapse_pressure
 from soilbin.records.scene import load_scene
 from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix
-from conftest import SCENES, make_problem
+from conftest import SCENES, jacobian_error, make_problem
 
 
 def read_curve(out):
@@ -35,37 +35,6 @@ def test_small_deformation_column_stays_linear(solve):
     summary, out = solve("column-elastic", "loading.magnitude=3600")
     for row in read_curve(out):
         assert row["displacement"] == pytest.approx(row["pressure"] * 10 / 10000.0, rel=1e-8)
-
-
-def jacobian_error(problem, seed=0):
-    """Relative error of J dx against central differences of the residual, at a
-    random increment (BC rows excluded)."""
-    newton, w = problem.newton, problem.w
-    rng = np.random.default_rng(seed)
-    fixed = np.concatenate([bc.dof_indices()[0] for bc in problem.bcs])
-    w.x.array[:] = 0.01 * rng.standard_normal(len(w.x.array))
-    w.x.array[fixed] = 0.0
-
-    def residual(x):
-        x.copy(w.vector)
-        w.x.scatter_forward()
-        b = x.duplicate()
-        newton.residual(b)
-        return b.array.copy()
-
-    x0 = w.vector.copy()
-    residual(x0)
-    newton.jacobian(newton.matrix)
-    dx = x0.duplicate()
-    dx.array[:] = rng.standard_normal(len(dx.array))
-    dx.array[fixed] = 0.0
-    Jdx = newton.matrix.createVecLeft()
-    newton.matrix.mult(dx, Jdx)
-    h = 1e-7
-    fd = (residual(x0 + h * dx) - residual(x0 - h * dx)) / (2 * h)
-    exact = Jdx.array.copy()
-    fd[fixed] = exact[fixed] = 0.0
-    return np.linalg.norm(fd - exact) / np.linalg.norm(exact), problem.points.trial
 
 
 @pytest.mark.parametrize("element, c", [("hex8", 1e9), ("hex8", 500.0), ("hex8-bbar", 500.0),

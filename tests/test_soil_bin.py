@@ -6,7 +6,8 @@ import pytest
 from mpi4py import MPI
 from dolfinx import fem
 
-from conftest import make_problem
+from conftest import jacobian_error, make_problem
+from soilbin.models.base import APEX, CAP, CAP_CORNER, ELASTIC, FAILURE
 from soilbin.forms.virtual_work import internal_force
 from soilbin.solver.stepping import run_load_steps
 
@@ -113,3 +114,26 @@ def test_the_tine_is_factorised_by_ldlt_where_its_jacobian_is_symmetric():
             "MUMPS LU (the Jacobian is unsymmetric)" if lu_iterates == every else
             f"MUMPS LDLT, LU for {lu_iterates} of {every} iterates (unsymmetric)")
         assert last.force == pytest.approx(reference.force, rel=1e-6)
+
+
+@pytest.mark.parametrize("amplitude", [1e-2, 1e-4])
+def test_the_tines_newton_matrix_is_the_derivative_of_its_residual(amplitude):
+    """The assembled Newton matrix of the tine (hex8-bbar, the modified cap on its failure
+    surface, apex, cap and cap corner, and elastic at the smaller amplitude; Mohr–Coulomb
+    contact points separated, slipping and sticking) against central differences of the
+    residual at a random state (README, *The large tine*: the stall of the fine mesh is
+    not an inconsistent tangent). Measured: 1e-11 and 3e-10."""
+    problem = make_problem("tine-2in-90deg", *COARSE)
+    error, trial = jacobian_error(problem, amplitude=amplitude)
+    assert error < 1e-8
+    modes = set(np.unique(trial["soil"]["yield_state"]).astype(int))
+    assert {FAILURE, APEX, CAP, CAP_CORNER} <= modes and (ELASTIC in modes) == (amplitude < 1e-3)
+    interface = problem.tool.interface
+    law, normals = interface.law, interface.normals
+    traction, _, _ = law.traction_update(interface.jump(), normals, interface.committed)
+    t_n = np.einsum("pi,pi->p", traction, normals)
+    shear = np.linalg.norm(traction - t_n[:, None] * normals, axis=1)
+    separated = np.all(traction == 0.0, axis=1)
+    slipping = ~separated & np.isclose(shear, law.c_a + t_n * np.tan(np.radians(law.delta)),
+                                       rtol=1e-9)
+    assert separated.any() and slipping.any() and (~separated & ~slipping).any()
