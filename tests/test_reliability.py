@@ -15,7 +15,7 @@ from soilbin.app import cli
 from soilbin.app.keys import scene_keys
 from soilbin.records.scene import load_scene
 from soilbin.records import toml_out
-from conftest import ROOT, SCENES, SOILBIN, last_json, soilbin_cli
+from conftest import ROOT, SCENES, SOILBIN, soilbin_cli
 
 BLOCK = str(SCENES / "block-drucker-prager.toml")
 COARSE_TINE = ["mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "mesh.behind=10.0",
