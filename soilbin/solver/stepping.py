@@ -22,7 +22,7 @@ from typing import Protocol, Sequence
 from ..errors import ConvergenceError
 
 #: Newton iterations of an easy step (the increment doubles) and of a hard one (it halves).
-EASY, HARD = 6, 10
+EASY, HARD = 5, 10
 
 
 class SolveResult(Protocol):
