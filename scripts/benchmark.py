@@ -105,6 +105,7 @@ def run_case(scene_name, overrides):
     """Solve one case in this process; returns its measurements."""
     start = time.process_time()
     from mpi4py import MPI
+    from soilbin.app.collapse import collapse_limit
     from soilbin.meshes import BUILDERS
     from soilbin.problem import SoilProblem
     from soilbin.records.scene import load_scene
@@ -114,7 +115,7 @@ def run_case(scene_name, overrides):
     problem = SoilProblem(scene, BUILDERS[scene.mesh_builder].build(scene.mesh, MPI.COMM_WORLD))
     setup = time.process_time() - start
     result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None,
-                            first_cuts=scene.loading.first_cuts)
+                            limit=collapse_limit(scene), first_cuts=scene.loading.first_cuts)
     solve = time.process_time() - start - setup
     newton, linear = problem.newton.stats, problem.newton.linear.stats
     kind, value = result_value(scene, result.steps) if result.steps else ("", None)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from soilbin.app.run import collapse_limit, collapse_pressure
+from soilbin.app.collapse import collapse_limit, collapse_pressure
 from soilbin.records.scene import load_scene
 from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix

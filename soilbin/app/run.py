@@ -8,59 +8,13 @@ from mpi4py import MPI
 from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
 from ..meshes import BUILDERS
 from ..problem import SoilProblem
-from ..records.scene import COLLAPSE_COMPLIANCE, Control, Headline
+from ..records.scene import Headline
 from ..solver.stepping import StepperResult, run_load_steps
 from . import figures, figures_3d, interrupt, section_figures
+from .collapse import collapse_limit, collapse_pressure
 from .insitu import check_initial_stress
 from .outdir import prepare_on_rank0
 from .output import RunFolder
-
-
-def collapse_step(loads, displacements, reference=1):
-    """Index of the first step (of curves starting at zero, not included) whose displacement
-    increment per unit load increment is at least COLLAPSE_COMPLIANCE times the secant
-    compliance displacements[reference] / loads[reference] (by default the first step's),
-    or None."""
-    compliance = displacements[reference] / loads[reference]
-    for k in range(1, len(loads)):
-        dp, dw = loads[k] - loads[k - 1], displacements[k] - displacements[k - 1]
-        if dw >= COLLAPSE_COMPLIANCE * compliance * dp:
-            return k
-    return None
-
-
-def collapse_pressure(records):
-    """The pressure of the first step whose settlement increment per unit pressure increment
-    is at least COLLAPSE_COMPLIANCE times the first step's, or None."""
-    pressures = [0.0] + [r.columns["pressure"] for r in records]
-    k = collapse_step(pressures, [0.0] + [r.displacement for r in records])
-    return None if k is None else pressures[k]
-
-
-def collapse_limit(scene):
-    """Under force control with ``until_collapse``: the stepper's ``limit`` that ends the run
-    at the first step whose travel per unit of applied load is COLLAPSE_COMPLIANCE times the
-    secant compliance at the first nominal load step, 1/steps of the load (the soil's limit:
-    the travel runs away), else None. Not the first step's own compliance: where that step
-    was cut to a small fraction of the nominal one in a soil that is stiff only at first (a
-    normally consolidated cap soil leaves its elastic range at about 1/1000 of the tine's
-    draft), the compaction that follows would read as a runaway."""
-    loading = scene.loading
-    if loading.control is not Control.FORCE or not loading.until_collapse:
-        return None
-    nominal = loading.magnitude / loading.steps
-
-    def limit(records):
-        loads = [0.0] + [r.load_factor * loading.magnitude for r in records]
-        reference = next((k for k, load in enumerate(loads) if load >= nominal * (1 - 1e-9)), None)
-        displacements = [0.0] + [r.displacement for r in records]
-        if reference is None or collapse_step(loads, displacements, reference) is None:
-            return None
-        last = records[-1]
-        return (f"the soil's limit: at load {loads[-1]:.6g} the displacement per unit load of "
-                f"step {last.step} is at least {COLLAPSE_COMPLIANCE:g} times the secant one at "
-                f"load {loads[reference]:.6g} (displacement {last.displacement:.6g})")
-    return limit
 
 
 def headline_results(scene, records):
