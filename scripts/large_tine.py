@@ -8,7 +8,8 @@ One load step of the default tine scene (by default 1/8 of its travel,
 the run) with GMRES + GAMG (``solver.linear = "amg"``) unless overridden
 (``--set solver.linear=blr``: MUMPS's block low-rank LU). On the fine meshes
 that step does not converge; a smaller one does (refine 2:
-``--set loading.magnitude=0.003125``, 1/32 of the travel; README, *The large
+``--set loading.magnitude=0.003125``, 1/32 of the travel; refine 4, with BLR:
+``0.00078125``, 1/128, in 32 iterations at 17.1 GB; README, *The large
 tine*). Prints a line per Newton iteration (CPU seconds of the iteration on
 rank 0, its Krylov iterations, the peak resident memory summed over the ranks,
 the line search's trial step lengths along the previous correction, the
