@@ -110,3 +110,46 @@ def test_a_local_return_failing_on_one_rank_fails_the_iterate_on_every_rank(tmp_
     assert done.returncode == 0, done.stderr
     for rank in (0, 1):
         assert f"rank {rank}: forced on rank 0" in done.stdout
+
+
+STOP_AFTER_STEP_2 = """
+import sys
+sys.path.insert(0, {tests!r})
+from test_checkpoint import TINE, stop_after
+from conftest import SCENES
+from soilbin.app.run import run_scene
+from soilbin.records.scene import load_scene
+
+summary = run_scene(load_scene(SCENES / "tine-2in-90deg.toml", TINE), {out!r},
+                    progress=stop_after(2))   # on every rank: all stop after the same step
+assert summary["status"] == "interrupted", summary
+"""
+
+
+@pytest.mark.slow
+def test_two_ranks_resume_from_their_checkpoint(tmp_path):
+    """Two ranks stopped after step 2 and resumed by `soilbin run --resume`, on two ranks (the
+    mesh partitioned anew) and on one, end where two ranks that never stopped do."""
+    from test_checkpoint import TINE
+    sets = [arg for key in TINE for arg in ("--set", key)]
+    whole = soilbin_cli("run", "tine-2in-90deg", "--json", "--out", tmp_path / "whole", *sets,
+                        mpi_ranks=2)
+    assert whole.returncode == 0, whole.stderr
+    script = tmp_path / "stop.py"
+    script.write_text(STOP_AFTER_STEP_2.format(tests=str(Path(__file__).parent),
+                                               out=str(tmp_path / "stopped")))
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+    stopped = subprocess.run(["mpirun", "-n", "2", sys.executable, str(script)],
+                             capture_output=True, text=True, env=env, timeout=300)
+    assert stopped.returncode == 0, stopped.stderr
+    theirs = last_json(whole.stdout)
+    for ranks in (2, 1):
+        resumed = soilbin_cli("run", "tine-2in-90deg", "--json", "--out", tmp_path / f"n{ranks}",
+                              "--resume", tmp_path / "stopped", *sets,
+                              mpi_ranks=ranks if ranks > 1 else None)
+        assert resumed.returncode == 0, resumed.stderr
+        mine = last_json(resumed.stdout)
+        assert mine["resumed_after_step"] == 2 and mine["n_ranks"] == ranks
+        assert mine["load_factor"] == theirs["load_factor"] == 1.0
+        assert mine["draft_force_at"] == pytest.approx(theirs["draft_force_at"], rel=1e-6)

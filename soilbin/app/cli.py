@@ -20,6 +20,7 @@ examples:
   soilbin run scenes/strip-footing-von-mises.toml
   soilbin run column-elastic --set materials.soil.E=5000 --set loading.magnitude=20
   soilbin run block-drucker-prager --json --out /tmp/block
+  soilbin run tine-2in-90deg --resume runs/tine-2in-90deg --out runs/tine-resumed
 
 exit status: 0 done (with loading.until_collapse = true a force-controlled run
 that stops at the soil's limit counts as done: status "collapse", at the first
@@ -44,7 +45,8 @@ def _parser(point_details=True):
 
     run = sub.add_parser("run", help="solve a scene", description=(
         "Solve a scene and write its run folder: scene.toml (resolved), curve.csv (one row per "
-        "converged step), summary.json and fields.xdmf (ParaView)."),
+        "converged step), summary.json, fields.xdmf (ParaView) and checkpoint/ (the last "
+        "converged step's state, for --resume)."),
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     run.add_argument("scene", help="scene file, or the name of a scene in scenes/ (see 'soilbin "
                      "list'); 'soilbin keys SCENE' lists every key it takes")
@@ -54,6 +56,10 @@ def _parser(point_details=True):
     run.add_argument("--out", type=Path, help="run folder (default: runs/<scene name>)")
     run.add_argument("--json", action="store_true",
                      help="no progress lines; the last stdout line is the summary as one JSON object")
+    run.add_argument("--resume", type=Path, metavar="FOLDER",
+                     help="go on from the last converged step of the stopped run in FOLDER (its "
+                          "checkpoint/; same scene but [solver], [output], [headline], same "
+                          "number of ranks); the new --out starts with its steps")
 
     sub.add_parser("list", help="list the scenes in scenes/ with their titles",
                    description="List the scenes shipped in the project's scenes/ folder.")
@@ -167,7 +173,7 @@ def _run(args):
     rank0 = comm.rank == 0
     try:
         summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress,
-                            overrides=args.overrides)
+                            overrides=args.overrides, resume=args.resume)
     except (InputError, interrupt.Interrupted):
         raise   # every rank raises these alike
     except Exception as err:

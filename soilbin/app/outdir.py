@@ -13,6 +13,8 @@ from ..errors import InputError
 RUN_FILES = ("scene.toml", "curve.csv", "curve.png", "summary.json", "fields.xdmf", "fields.h5",
              "tool.xdmf", "tool-section.png", "sections-*.png", "soil-3d.png", "traceback*.txt")
 FRAMES_DIR = "fields"
+#: Folders a run writes: its checkpoint (``app.checkpoint``), also while one replaces another.
+RUN_FOLDERS = (FRAMES_DIR, "checkpoint", "checkpoint.new", "checkpoint.old")
 
 
 def prepare(path):
@@ -28,7 +30,8 @@ def prepare(path):
     for pattern in RUN_FILES:
         for name in path.glob(pattern):
             name.unlink(missing_ok=True)
-    shutil.rmtree(path / FRAMES_DIR, ignore_errors=True)
+    for folder in RUN_FOLDERS:
+        shutil.rmtree(path / folder, ignore_errors=True)
     return path
 
 

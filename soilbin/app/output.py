@@ -182,14 +182,22 @@ class RunFolder:
         self._stops = scene.output.stops(scene.loading)
         self.records = []   # the converged steps, in order
 
+    def add_earlier(self, records):
+        """The steps of the run this one resumes: their curve.csv rows (no fields)."""
+        for record in records:
+            self._add_row(record)
+
     def add_step(self, record):
+        self._add_row(record)
+        if self.fields is not None and self.writes_fields(record):
+            self._write_fields(record)
+
+    def _add_row(self, record):
         self.records.append(record)
         if self._rank0:
             values = {**dataclasses.asdict(record), **record.columns}
             with deferred(), open(self.path / "curve.csv", "a", newline="") as f:
                 csv.writer(f).writerow([_text(values[column]) for column in self._columns])
-        if self.fields is not None and self.writes_fields(record):
-            self._write_fields(record)
 
     def writes_fields(self, record):
         """Fields are written every ``every`` steps, at the stated loads and at the end."""

@@ -2,15 +2,17 @@
 import dataclasses
 import sys
 import time
+from pathlib import Path
 
 from mpi4py import MPI
 
 from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
+from ..errors import InputError
 from ..meshes import BUILDERS
 from ..problem import SoilProblem
 from ..records.scene import Headline
 from ..solver.stepping import StepperResult, run_load_steps
-from . import figures, figures_3d, interrupt, section_figures
+from . import checkpoint, figures, figures_3d, interrupt, section_figures
 from .collapse import collapse_limit, collapse_pressure
 from .insitu import check_initial_stress
 from .outdir import prepare_on_rank0
@@ -63,18 +65,27 @@ def draft_estimate(scene):
                       f"delta = {delta:.3g})") from None
 
 
-def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
+def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), resume=None):
     """Solve ``scene``, writing into ``out_dir`` (checked writable and cleared of an older
     run before the mesh is built); returns the summary dict (``overrides``: the --set items
-    the scene was loaded with, echoed in it). SIGINT or SIGTERM during the steps ends the
+    the scene was loaded with, echoed in it). ``resume``: a stopped run's folder to go on
+    from (its checkpoint, ``app.checkpoint``). SIGINT or SIGTERM during the steps ends the
     run with status "interrupted" (summary written, no collective call after it)."""
     start, start_cpu = time.perf_counter(), time.process_time()
+    if resume is not None and Path(resume).resolve() == Path(out_dir).resolve():
+        raise InputError(f"--resume {resume}: give the resumed run another --out (this "
+                         "folder keeps the steps before the resume)")
+    earlier = checkpoint.read(resume, scene) if resume is not None else None
     out_dir = prepare_on_rank0(comm, out_dir)
     with interrupt.kept():
         tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
     check_initial_stress(scene, tagged)
     problem = SoilProblem(scene, tagged)
     folder = RunFolder(out_dir, problem, scene)
+    checkpoints = checkpoint.Checkpoints(out_dir, problem, scene)
+    if earlier is not None:
+        earlier.restore(problem)
+        folder.add_earlier(earlier.records)
     setup_s = time.perf_counter() - start
 
     stops = scene.output.stops(scene.loading)
@@ -82,6 +93,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
 
     def on_step(record):
         folder.add_step(record)
+        checkpoints.write(folder.records)
         if sections and any(abs(record.load_factor - s) < 1e-9 for s in stops):
             load = record.load_factor * scene.loading.magnitude
             section_figures.sections_png(problem, scene, load, out_dir / f"sections-{load:g}.png")
@@ -92,7 +104,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
     interrupted = None
     try:
         result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step, stops=stops,
-                                limit=collapse_limit(scene), first_cuts=loading.first_cuts)
+                                limit=collapse_limit(scene), first_cuts=loading.first_cuts,
+                                resume=folder.records)
     except interrupt.Interrupted as signal:
         interrupted = signal
         result = StepperResult(tuple(folder.records), False,
@@ -111,6 +124,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=()):
         "title": scene.title,
         "units": scene.units,
         "overrides": list(overrides),
+        **({"resumed_from": str(resume), "resumed_after_step": len(earlier.records)}
+           if earlier is not None else {}),
         "status": status,
         "converged": status in ("complete", "collapse"),
         "message": result.message,

@@ -9,10 +9,12 @@ loads (``loads``: supports, the driven boundary, dead loads, gravity, the
 in-situ state) and the tool (``tool``). Outputs read named fields
 (:meth:`SoilProblem.output_fields`), not the parts.
 """
+import numpy as np
 import ufl
 from dolfinx import fem
 
 from ..forms.discretisation import Discretisation
+from ..layout import DOFS, GLOBAL, NODES, POINTS
 from ..records.scene import TOOL
 from ..solver.newton import NewtonSolver
 from ..solver.quadrature import MaterialPoints
@@ -157,6 +159,49 @@ class SoilProblem:
         """Displacement and force of the driven boundary or tool along the loading direction,
         and its further values (:attr:`curve_columns`)."""
         return self.drive.observe()
+
+    # -- checkpoints ------------------------------------------------------------------
+    def _stateful_parts(self):
+        parts = {"kinematics": self.kinematics, "points": self.points}
+        if self.tool is not None:
+            parts["tool"] = self.tool
+        if self.drive is not self.tool:
+            parts["load"] = self.drive
+        return parts
+
+    def state(self):
+        """Everything the last converged step leaves for the next: name -> (``layout``
+        kind, this rank's array); with :meth:`restore`, a checkpoint (``app.checkpoint``)."""
+        state = {"w": (DOFS, self.w_committed.x.array), "factors": (GLOBAL, self._factors),
+                 "border_values": (GLOBAL, self._border_values),
+                 "force_scale": (GLOBAL, self.newton.force_scale)}
+        for name, part in self._stateful_parts().items():
+            state.update({f"{name}/{key}": value for key, value in part.state().items()})
+        return state
+
+    def entities(self):
+        """This rank's entities of each ``layout`` kind, for :meth:`state`'s arrays: those of
+        each local cell ((n_cells, k) indices, ghost cells included; the unknown's by block)
+        and the contact points' keys (face tag and initial position, (n, 4)), or None."""
+        mesh, dofmap = self.mesh, self.disc.space.dofmap
+        cells = mesh.topology.index_map(mesh.topology.dim)
+        n_cells = cells.size_local + cells.num_ghosts
+        tables = {DOFS: dofmap.list.array.reshape(n_cells, -1),
+                  POINTS: np.arange(n_cells * self.points.points_per_cell).reshape(n_cells, -1),
+                  NODES: mesh.geometry.dofmap.array.reshape(n_cells, -1)}
+        return tables, None if self.tool is None else self.tool.interface.contact_keys()
+
+    def restore(self, state):
+        """Back to a :meth:`state`, as if its step had just converged."""
+        self.w.x.array[:] = state["w"].ravel()
+        self.w_committed.x.array[:] = self.w.x.array
+        self._factors = tuple(float(f) for f in state["factors"])
+        self._factor = self._factors[0]
+        self._border_values = tuple(float(v) for v in state["border_values"])
+        self.newton.include_force_scale(float(state["force_scale"]))
+        for name, part in self._stateful_parts().items():   # the mesh moves before the points
+            part.restore({key.removeprefix(f"{name}/"): value for key, value in state.items()
+                          if key.startswith(f"{name}/")})
 
     # -- outputs ----------------------------------------------------------------------
     def displacement(self):

@@ -12,6 +12,7 @@ import ufl
 from dolfinx import fem
 
 from ..forms import updated_lagrangian, virtual_work
+from ..layout import DOFS, NODES
 from ..tensors import ufl_mandel
 
 
@@ -28,6 +29,15 @@ class _Extrapolated:
     def _remember_increment(self):
         """Δw_n of the step that converges (before w_n moves on)."""
         self._last_increment = self._w.x.array - self._w_committed.x.array
+
+    def state(self):
+        """What the last converged step leaves for the next: name -> (``layout`` kind, array)."""
+        return ({} if self._last_increment is None else
+                {"last_increment": (DOFS, self._last_increment)})
+
+    def restore(self, state):
+        """Back to a :meth:`state` (w itself is the problem's)."""
+        self._last_increment = state.get("last_increment")
 
 
 class SmallStrain(_Extrapolated):
@@ -72,13 +82,13 @@ class SmallStrain(_Extrapolated):
         return self._disc.div(self.total_displacement())
 
     def displacement_p1(self):
-        """The total displacement as a P1 Function (for output)."""
+        """The total displacement as a P1 Function (for output): its values at the nodes."""
         if self._p1 is None:
             self._p1 = fem.Function(fem.VectorFunctionSpace(self._disc.mesh, ("Lagrange", 1)),
                                     name="displacement")
-        self._p1.interpolate(self._w.sub(0).collapse() if self._disc.element.mixed else self._w)
-        values = self._p1.x.array.reshape(-1, self._disc.dimension)
-        values[:] = self._disc.in_mesh_axes(values)
+            self._vertex_dofs = self._disc.vertex_dofs(self._p1.function_space)
+        nodal = self._w.x.array[self._vertex_dofs]
+        self._p1.x.array[:] = self._disc.in_mesh_axes(nodal).ravel()
         return self._p1
 
 
@@ -138,6 +148,14 @@ class UpdatedLagrangian(_Extrapolated):
     def displacement_p1(self):
         return self._motion.total
 
+    def state(self):
+        """The extrapolation's increment and the mesh's position."""
+        return {**super().state(), **self._motion.state()}
+
+    def restore(self, state):
+        super().restore(state)
+        self._motion.restore(state)
+
 
 def kinematics_of(analysis, disc, w, w_committed):
     """The kinematics a scene's analysis options ask for."""
@@ -148,8 +166,8 @@ def kinematics_of(analysis, disc, w, w_committed):
 class MeshMotion:
     """Moves the mesh by the converged increment and accumulates the total displacement.
 
-    The increment is interpolated onto the trilinear geometry (exact for
-    hex8; at the vertices for hex27). The dilatation increment of
+    The increment is taken at the vertices onto the trilinear geometry (exact
+    for hex8; at the vertices for hex27). The dilatation increment of
     mean-dilatation elements starts each step from zero; the pressure is
     total and carries over.
     """
@@ -159,25 +177,34 @@ class MeshMotion:
         self._w, self._disc = w, disc
         V1 = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
         self.total = fem.Function(V1, name="displacement")
-        self._increment = fem.Function(V1)
         cells = mesh.topology.index_map(mesh.topology.dim)
         n_cells = cells.size_local + cells.num_ghosts
         self._nodes = mesh.geometry.dofmap.array.reshape(n_cells, -1).ravel()
         self._dofs = V1.dofmap.list.array.reshape(n_cells, -1).ravel()
         self._x = mesh.geometry.x
-        if disc.element.mixed:
-            _, self._reset = disc.space.sub(0).collapse()
-            _, dilatation = disc.space.sub(1).collapse()
-            self._reset = np.concatenate([self._reset, dilatation])
+        self._vertex_dofs = disc.vertex_dofs(V1)
+        if disc.element.mixed:   # the displacement and dilatation dofs (the pressure carries over)
+            self._reset = np.unique(np.concatenate(
+                [disc.displacement_space.sub(i).dofmap.list.array for i in range(disc.dimension)]
+                + [disc.space.sub(1).dofmap.list.array]))
         else:
             self._reset = slice(None)
 
     def advance(self):
-        source = self._w.sub(0).collapse() if self._disc.element.mixed else self._w
-        self._increment.interpolate(source)
         dim = self._disc.dimension
-        du = self._increment.x.array.reshape(-1, dim)
-        du[:] = self._disc.in_mesh_axes(du)
+        du = self._disc.in_mesh_axes(self._w.x.array[self._vertex_dofs])
         self._x[self._nodes, :dim] = self._x[self._nodes, :dim] + du[self._dofs]
-        self.total.x.array[:] += self._increment.x.array
+        self.total.x.array[:] += du.ravel()
         self._w.x.array[self._reset] = 0.0
+
+    def state(self):
+        """The mesh's nodes and the total displacement at them."""
+        total = np.zeros_like(self._x)
+        dim = self._disc.dimension
+        total[self._nodes, :dim] = self.total.x.array.reshape(-1, dim)[self._dofs]
+        return {"mesh_x": (NODES, self._x), "total_displacement": (NODES, total)}
+
+    def restore(self, state):
+        self._x[:] = state["mesh_x"]
+        dim = self._disc.dimension
+        self.total.x.array.reshape(-1, dim)[self._dofs] = state["total_displacement"][self._nodes, :dim]

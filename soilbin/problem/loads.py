@@ -23,6 +23,7 @@ from dolfinx import fem, la
 import dolfinx.fem.petsc  # noqa: F401
 
 from ..errors import InputError
+from ..layout import GLOBAL
 from ..records.scene import TOOL, Control
 from ..solver.stepping import Observation
 from ..tensors import ufl_from_mandel
@@ -225,6 +226,16 @@ class BoundaryLoad:
     def roll_back(self):
         if self.indirect:
             self.set_value(self._committed_load)
+
+    def state(self):
+        """The committed load factor and the traction's magnitude."""
+        return {"factor": (GLOBAL, self._committed_factor), "load": (GLOBAL, self.value)}
+
+    def restore(self, state):
+        self._factor = self._committed_factor = float(state["factor"])
+        self.set_value(float(state["load"]))
+        if self.indirect:
+            self._committed_load = self.value
 
     # -- the traction's magnitude as a Newton unknown (indirect displacement control) -------
     @property

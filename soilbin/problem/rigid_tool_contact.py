@@ -30,6 +30,7 @@ from petsc4py import PETSc
 from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401
 
+from ..layout import CONTACT
 from ..solver.linear_solver import all_symmetric
 from ..tensors import from_mandel
 
@@ -91,6 +92,7 @@ class RigidToolContact:
         self.support_dofs = np.unique(np.concatenate(pressed_dofs))
         self.scalar_space = scalar_space
         self.points_per_face = [len(n) for n in nodes]
+        self._face_tags = list(face_tags)
         self.nodes = np.concatenate(nodes)               # local node index per contact point
         self.areas = np.concatenate(areas)
         self.normals = np.concatenate(normals)
@@ -175,6 +177,21 @@ class RigidToolContact:
         self.committed = self.trial
         if self._incremental:   # the unknown restarts from zero after the commit
             self._committed_displacement = self._soil_displacement()
+
+    def contact_keys(self):
+        """What tells the contact points apart on any partition: the tag of the face and
+        the initial position, (n, 4)."""
+        faces = np.repeat(self._face_tags, self.points_per_face)
+        return np.column_stack([faces, self.reference_points])
+
+    def state(self):
+        """The committed law state and soil displacement at the contact points."""
+        return {"committed_displacement": (CONTACT, self._committed_displacement),
+                **{f"law/{key}": (CONTACT, value) for key, value in self.committed.items()}}
+
+    def restore(self, state):
+        self._committed_displacement = state["committed_displacement"]
+        self.committed = self.trial = {key: state[f"law/{key}"] for key in self.committed}
 
     def force(self):
         """Resultant force of the soil on the tool (3,), summed over ranks."""

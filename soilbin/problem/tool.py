@@ -27,6 +27,7 @@ from mpi4py import MPI
 from dolfinx import fem
 
 from ..errors import InputError
+from ..layout import GLOBAL
 from ..records.scene import Control
 from ..solver.stepping import Observation
 from .loads import assemble_total, probe
@@ -127,6 +128,18 @@ class RigidTool:
 
     def roll_back(self):
         self.set_value(self._committed_travel)
+
+    def state(self):
+        """The committed travel, the draft aimed at and the interface's state."""
+        return {"travel": (GLOBAL, self._committed_travel), "target": (GLOBAL, self._target),
+                **{f"interface/{key}": value for key, value in self.interface.state().items()}}
+
+    def restore(self, state):
+        self._target = float(state["target"])
+        self.set_value(float(state["travel"]))
+        self._committed_travel = self.travel
+        self.interface.restore({key.removeprefix("interface/"): value
+                                for key, value in state.items() if key.startswith("interface/")})
 
     def force(self):
         """Resultant force (3,) the whole tool exerts on the soil, world axes (across a symmetry

@@ -120,6 +120,12 @@ class NewtonSolver:
         """Make the residual floor relative to at least this force norm (e.g. of dead loads)."""
         self._force_scale = max(self._force_scale, norm)
 
+    @property
+    def force_scale(self):
+        """The force norm the residual floor is relative to: the largest first residual of a
+        step so far, or of the loads present from the start."""
+        return self._force_scale
+
     def residual(self, b):
         """Assemble the residual at the current ``w`` into ``b``; returns its norm (with the
         border's equation). Raises ReturnMapError from the constitutive update."""

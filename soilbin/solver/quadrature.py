@@ -14,6 +14,7 @@ import ufl
 from dolfinx import fem
 
 from ..errors import ReturnMapError
+from ..layout import POINTS
 from ..tensors import from_mandel, to_mandel
 from .linear_solver import all_symmetric
 
@@ -164,6 +165,25 @@ class MaterialPoints:
                     for key, value in state.items()}
         if not self._tangent_frozen:
             self._converged_tangent = self._tangent.copy()
+
+    def state(self):
+        """The committed history of every region and the last converged tangent, over all
+        local points: name -> (``layout`` kind, array), for :meth:`restore`."""
+        state = {}
+        for name, history in self.committed.items():
+            for key, value in history.items():
+                full = np.zeros((len(self._cells) * self.points_per_cell,) + value.shape[1:])
+                full[self.index[name]] = value
+                state[f"{name}/{key}"] = (POINTS, full)
+        return {**state, "converged_tangent": (POINTS, self._converged_tangent)}
+
+    def restore(self, state):
+        """Back to a :meth:`state`, the unknowns already at that state: its stress and
+        tangent are written for the forms."""
+        self.committed = {name: {key: state[f"{name}/{key}"][self.index[name]] for key in history}
+                          for name, history in self.committed.items()}
+        self._converged_tangent = state["converged_tangent"]
+        self.update()
 
     def history(self, key):
         """A committed history variable over all local points (n_points, ...), zero where absent."""

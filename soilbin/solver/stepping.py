@@ -11,11 +11,14 @@ nominal one) after an easy step (at most ``EASY`` iterations), halves after
 a hard one (at least ``HARD``, before the next one fails), and stays
 otherwise. Every converged step is handed to
 ``on_step`` at once, so a run that stops early leaves all its converged
-steps behind. A ``limit`` callback, asked after every converged step, may end
+steps behind; its record carries the increment the stepper tries next, so
+that a run can go on from it (``resume``: the records of a run whose
+problem state was restored to its last step). A ``limit`` callback, asked after every converged step, may end
 the run early with its message (under force control: the soil's limit is
 reached, the travel running away).
 """
 import dataclasses
+import math
 import time
 from typing import Protocol, Sequence
 
@@ -71,6 +74,7 @@ class StepRecord:
     residuals: tuple
     columns: dict = dataclasses.field(default_factory=dict)
     cut_reason: str = ""    # why the last attempt of this step that was cut failed
+    next_increment: float = 0.0   # the load factor's increment the stepper tries next
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,13 +86,19 @@ class StepperResult:
 
 
 def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter,
-                   stops=(), limit=None, first_cuts=0):
+                   stops=(), limit=None, first_cuts=0, resume=()):
     """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors);
-    ``limit(records)``, if given, returns why the run ends after the last record, or None."""
+    ``limit(records)``, if given, returns why the run ends after the last record, or None.
+    ``resume``: the records of the steps already taken (the problem at the last one's state);
+    the run goes on from there, its records following them."""
     nominal = 1.0 / steps
     level, factor = first_cuts, 0.0      # increment = nominal / 2**level
     cuts, failed, reason = 0, 0, ""
-    records, start = [], clock()
+    records, start = list(resume), clock()
+    if records:
+        last = records[-1]
+        factor, start = last.load_factor, start - last.wall_s
+        level = round(math.log2(nominal / last.next_increment))
     while factor < 1.0 - 1e-12:
         increment = min(nominal / 2**level, 1.0 - factor)
         stop = min((s for s in stops if s > factor + 1e-12), default=None)
@@ -111,17 +121,17 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
         factor += increment
         problem.commit()
         seen = problem.observe()
+        if result.iterations <= EASY:
+            level = max(level - 1, 0)
+        elif result.iterations >= HARD:
+            level = min(level + 1, max_cuts)
         record = StepRecord(len(records) + 1, factor, seen.displacement, seen.force,
                             result.iterations, cuts, failed, clock() - start, result.residuals,
-                            seen.columns, reason)
+                            seen.columns, reason, nominal / 2**level)
         records.append(record)
         on_step(record)
         ended = limit(records) if limit is not None else None
         if ended:
             return StepperResult(tuple(records), False, ended, limit_reached=True)
-        if result.iterations <= EASY:
-            level = max(level - 1, 0)
-        elif result.iterations >= HARD:
-            level = min(level + 1, max_cuts)
         cuts, failed, reason = 0, 0, ""
     return StepperResult(tuple(records), True, "")
