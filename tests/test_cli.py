@@ -163,3 +163,22 @@ def test_a_scene_that_is_not_utf8_is_a_clear_error(capsys, tmp_path):
     status, _, err = run_main(capsys, "run", str(latin1))
     assert status == 2 and "Traceback" not in err
     assert f"{latin1}: not UTF-8 text (byte " in err
+
+
+def test_resume_without_a_checkpoint_is_one_clear_line(capsys, tmp_path):
+    status, out, err = run_main(capsys, "run", BLOCK, "--resume", "no/such/run", "--out", str(tmp_path))
+    assert status == 2 and len(err.strip().splitlines()) == 1
+    assert "--resume no/such/run: no checkpoint there" in err
+
+
+def test_verbose_prints_every_newton_iterate(capsys, tmp_path):
+    """-v: a line per iterate, the first (iteration 0) before any correction, then each step's
+    line; the last iterate of a step is below its target."""
+    status, out, err = run_main(capsys, "run", "column-elastic-large", "-v", "--out", str(tmp_path))
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    lines = [line.split() for line in err.splitlines() if line.startswith("  Newton")]
+    assert status == 0
+    assert len(lines) == summary["newton_iterations"] + summary["n_steps"]
+    assert sum(line[1] == "0" for line in lines) == summary["n_steps"]
+    last = [lines[i] for i in range(len(lines)) if i + 1 == len(lines) or lines[i + 1][1] == "0"]
+    assert all(float(line[3]) <= float(line[5]) for line in last)

@@ -6,6 +6,7 @@ import json
 import logging
 import sys
 import tempfile
+import time
 import traceback
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -56,10 +57,13 @@ def _parser(point_details=True):
     run.add_argument("--out", type=Path, help="run folder (default: runs/<scene name>)")
     run.add_argument("--json", action="store_true",
                      help="no progress lines; the last stdout line is the summary as one JSON object")
+    run.add_argument("-v", "--verbose", action="store_true",
+                     help="also a progress line per Newton iteration (its residual, the "
+                          "target and the seconds since the last line): for long runs")
     run.add_argument("--resume", type=Path, metavar="FOLDER",
                      help="go on from the last converged step of the stopped run in FOLDER (its "
-                          "checkpoint/; same scene but [solver], [output], [headline], same "
-                          "number of ranks); the new --out starts with its steps")
+                          "checkpoint/; the same scene but for [solver], [output] and "
+                          "[headline], any number of ranks); the new --out starts with its steps")
 
     sub.add_parser("list", help="list the scenes in scenes/ with their titles",
                    description="List the scenes shipped in the project's scenes/ folder.")
@@ -162,6 +166,19 @@ def _progress(record):
           + (f"  (last cut: {record.cut_reason})" if record.cuts else ""), file=sys.stderr, flush=True)
 
 
+class _IterateProgress:
+    """A line per Newton iterate on stderr: residual, target, seconds since the last line."""
+
+    def __init__(self):
+        self._last = time.perf_counter()
+
+    def __call__(self, iteration, residual, target):
+        now = time.perf_counter()
+        print(f"  Newton {iteration:3d}  residual {residual:10.4g}  target {target:9.3g}  "
+              f"{now - self._last:8.2f} s", file=sys.stderr, flush=True)
+        self._last = now
+
+
 def _run(args):
     from mpi4py import MPI
     from ..records.scene import load_scene
@@ -172,8 +189,11 @@ def _run(args):
     comm = MPI.COMM_WORLD
     rank0 = comm.rank == 0
     try:
-        summary = run_scene(scene, out, progress=None if (args.json or not rank0) else _progress,
-                            overrides=args.overrides, resume=args.resume)
+        quiet = args.json or not rank0
+        summary = run_scene(scene, out, progress=None if quiet else _progress,
+                            overrides=args.overrides, resume=args.resume,
+                            iterate_progress=None if quiet or not args.verbose else
+                            _IterateProgress())
     except (InputError, interrupt.Interrupted):
         raise   # every rank raises these alike
     except Exception as err:
@@ -187,9 +207,11 @@ def _run(args):
         if args.json:
             print(json.dumps(summary))
         else:
+            resumed = (f" (resumed after step {summary['resumed_after_step']} of {args.resume})"
+                       if args.resume else "")
             print(f"{summary['status']}: {summary['n_steps']} steps, "
                   f"{summary['newton_iterations']} Newton iterations, {summary['wall_s']} s; "
-                  f"results in {out}", file=sys.stderr)
+                  f"results in {out}{resumed}", file=sys.stderr)
             for key in scene.headline:
                 print(f"{key} = {summary[key]}")
         if summary["message"]:

@@ -65,12 +65,15 @@ def draft_estimate(scene):
                       f"delta = {delta:.3g})") from None
 
 
-def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), resume=None):
+def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), resume=None,
+              iterate_progress=None):
     """Solve ``scene``, writing into ``out_dir`` (checked writable and cleared of an older
     run before the mesh is built); returns the summary dict (``overrides``: the --set items
-    the scene was loaded with, echoed in it). ``resume``: a stopped run's folder to go on
-    from (its checkpoint, ``app.checkpoint``). SIGINT or SIGTERM during the steps ends the
-    run with status "interrupted" (summary written, no collective call after it)."""
+    the scene was loaded with, echoed in it). ``progress(record)`` is called after each
+    converged step, ``iterate_progress(iteration, residual, target)`` at each Newton
+    iterate. ``resume``: a stopped run's folder to go on from (its checkpoint,
+    ``app.checkpoint``). SIGINT or SIGTERM during the steps ends the run with status
+    "interrupted" (summary written, no collective call after it)."""
     start, start_cpu = time.perf_counter(), time.process_time()
     if resume is not None and Path(resume).resolve() == Path(out_dir).resolve():
         raise InputError(f"--resume {resume}: give the resumed run another --out (this "
@@ -81,6 +84,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
         tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
     check_initial_stress(scene, tagged)
     problem = SoilProblem(scene, tagged)
+    problem.newton.on_iterate = iterate_progress
     folder = RunFolder(out_dir, problem, scene)
     checkpoints = checkpoint.Checkpoints(out_dir, problem, scene)
     if earlier is not None:

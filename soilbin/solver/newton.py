@@ -105,6 +105,8 @@ class NewtonSolver:
         self._gap = w.vector.duplicate()
         self._force_scale = 0.0
         self._symmetric_tangent = symmetric_tangent
+        #: Called at every iterate with (iteration, residual norm, target), e.g. for progress.
+        self.on_iterate = None
         n_dofs = w.vector.getSize()
         self.linear = LinearSolver(comm, options.linear, disc, n_dofs,
                                    symmetric, prefix)
@@ -184,6 +186,8 @@ class NewtonSolver:
         if residuals[0] > 0.0 and len(residuals) == 1:
             self._force_scale = max(self._force_scale, residuals[0])
         target = max(self._opts.rtol * residuals[0], self._opts.atol * self._force_scale)
+        if self.on_iterate is not None:
+            self.on_iterate(len(residuals) - 1, residuals[-1], target)
         return residuals[-1] <= target
 
     def _newton_step(self):
