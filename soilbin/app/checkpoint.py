@@ -50,21 +50,18 @@ class _Cells:
         mesh = problem.mesh
         cells = mesh.topology.index_map(mesh.topology.dim)
         self.n_owned, self.n_global = cells.size_local, cells.size_global
-        self.number = np.asarray(mesh.topology.original_cell_index)[:cells.size_local + cells.num_ghosts]
+        n_local = cells.size_local + cells.num_ghosts
+        self.number = np.asarray(mesh.topology.original_cell_index)[:n_local]
         self.tables, self.contact = problem.entities()
-        nodes = mesh.geometry.dofmap.array.reshape(len(self.number), -1)
+        nodes = mesh.geometry.dofmap.array.reshape(n_local, -1)
         self.centres = mesh.geometry.x[nodes].mean(axis=1)   # taken before the mesh moves
-
-    @staticmethod
-    def _per_entity(kind, values, table):
-        values = np.asarray(values)
-        n = table.max(initial=-1) + 1
-        return values.reshape(n, -1) if kind == DOFS else values
 
     def by_cell(self, kind, values):
         """(n_owned, k, ...): the values of each owned cell's entities."""
-        table = self.tables[kind][:self.n_owned]
-        return self._per_entity(kind, values, self.tables[kind])[table]
+        table, values = self.tables[kind], np.asarray(values)
+        if kind == DOFS:   # flat: by block
+            values = values.reshape(table.max(initial=-1) + 1, -1)
+        return values[table[:self.n_owned]]
 
     def local(self, kind, stored):
         """This rank's array (ghosts included) from the stored (n_global, k, ...) one."""
@@ -85,6 +82,12 @@ def _gather_by_number(comm, numbers, values):
     return out
 
 
+def _gather_rows(comm, values):
+    """On rank 0, every rank's rows one after the other; None elsewhere."""
+    values = comm.gather(values, root=0)
+    return np.concatenate(values) if comm.rank == 0 else None
+
+
 class Checkpoints:
     """Writes a run folder's checkpoint after each converged step (collective)."""
 
@@ -102,15 +105,13 @@ class Checkpoints:
         """The problem's state as stored (on rank 0; None elsewhere)."""
         cells, comm = self._cells, self._comm
         arrays = {"centres": self._centres}
+        if cells.contact is not None:
+            arrays[f"{CONTACT}/keys"] = _gather_rows(comm, cells.contact)
         for name, (kind, values) in self._problem.state().items():
             if kind == GLOBAL:
                 arrays[f"{GLOBAL}/{name}"] = np.asarray(values)
             elif kind == CONTACT:
-                keys = comm.gather(cells.contact, root=0)
-                values = comm.gather(np.asarray(values), root=0)
-                if comm.rank == 0:
-                    arrays[f"{CONTACT}/keys"] = np.concatenate(keys)
-                    arrays[f"{CONTACT}/{name}"] = np.concatenate(values)
+                arrays[f"{CONTACT}/{name}"] = _gather_rows(comm, np.asarray(values))
             else:
                 arrays[f"{kind}/{name}"] = self._gather(cells.by_cell(kind, values))
         return arrays if comm.rank == 0 else None

@@ -207,4 +207,5 @@ class MeshMotion:
     def restore(self, state):
         self._x[:] = state["mesh_x"]
         dim = self._disc.dimension
-        self.total.x.array.reshape(-1, dim)[self._dofs] = state["total_displacement"][self._nodes, :dim]
+        total = state["total_displacement"]
+        self.total.x.array.reshape(-1, dim)[self._dofs] = total[self._nodes, :dim]
