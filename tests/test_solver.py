@@ -4,7 +4,7 @@ import pytest
 from petsc4py import PETSc
 
 from conftest import make_problem
-from soilbin.errors import ConvergenceError, InputError
+from soilbin.errors import ConvergenceError
 from soilbin.solver.condensation import CellCondensation
 from soilbin.solver.newton import CP_TOLERANCE, NewtonFailure
 from soilbin.solver.stepping import run_load_steps
@@ -36,84 +36,23 @@ COARSE_TINE = ("mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "m
                "mesh.bin_width=10.0", "loading.steps=2", "loading.magnitude=0.025")
 
 
-def test_blr_and_kept_factorisations_give_the_curve_of_lu_on_the_tine():
+def test_blr_gives_the_curve_of_lu_on_the_tine():
     """The block low-rank factor of the condensed system, as the solver, follows LU's curve
     (the cap's unsymmetric tangent, cut steps included): its inexact corrections do not
-    change what Newton converges to; nor do GMRES solves on a factorisation kept from an
-    earlier iterate (``solver.factor_reuse``)."""
-    curves, stats = {}, {}
-    for kind, reuse in (("lu", 0), ("blr", 0), ("lu", 5), ("blr", 5)):
+    change what Newton converges to."""
+    curves = {}
+    for kind in ("lu", "blr"):
         # the strict residual floor: the scene's 1e-6 leaves 2.6e-6 between the curves
         problem = make_problem("tine-2in-90deg", *COARSE_TINE, f"solver.linear={kind}",
-                               f"solver.factor_reuse={reuse}", "solver.atol=1e-10")
+                               "solver.atol=1e-10")
         result = run_load_steps(problem, 2, 3, lambda r: None)
         assert result.complete
-        curves[kind, reuse] = np.array([(r.load_factor, r.force) for r in result.steps])
-        stats[kind, reuse] = problem.newton.linear.stats
-        assert problem.newton.linear.description.startswith(
-            "MUMPS BLR LU" if kind == "blr" else "MUMPS LU")
-    assert stats["blr", 0]["factorisations"] == stats["blr", 0]["solves"]
-    assert stats["blr", 0]["krylov_iterations"] == 0
-    for kind in ("lu", "blr"):
-        kept = stats[kind, 5]
-        assert kept["factorisations"] < kept["solves"] and kept["krylov_iterations"] > 0
-    for key, other in curves.items():
-        assert other[:, 0] == pytest.approx(curves["lu", 0][:, 0], rel=1e-12), key
-        assert other[:, 1] == pytest.approx(curves["lu", 0][:, 1], rel=1e-6), key
-
-
-def tridiagonal(n, diagonal):
-    A = PETSc.Mat().createAIJ([n, n], nnz=3)
-    for i in range(n):
-        A[i, i] = diagonal
-        if i:
-            A[i, i - 1] = -1.0
-        if i < n - 1:
-            A[i, i + 1] = -1.0
-    A.assemble()
-    return A
-
-
-def kept_factor_counts(diagonals):
-    """(factorisations, GMRES iterations) so far after each solve of a sequence of
-    tridiagonal matrices by LU with factor_reuse = 2; every solution checked."""
-    from mpi4py import MPI
-    from soilbin.records.scene import LinearSolverKind
-    from soilbin.solver.linear_solver import LinearSolver
-
-    linear = LinearSolver(MPI.COMM_SELF, LinearSolverKind.LU, None, 50, False, "reuse_test_",
-                          reuse=2)
-    b = PETSc.Vec().createSeq(50)
-    b.set(1.0)
-    x, r = b.duplicate(), b.duplicate()
-    counts = []
-    for diagonal in diagonals:
-        A = tridiagonal(50, diagonal)
-        linear.set_operator(A, lambda: False)
-        linear.solve(b, x)
-        A.mult(x, r)
-        r.axpy(-1.0, b)
-        assert r.norm() < 1e-7 * b.norm()
-        counts.append((linear.stats["factorisations"], linear.stats["krylov_iterations"]))
-    return counts
-
-
-def test_a_kept_factorisation_is_redone_when_gmres_needs_too_many_iterations():
-    """factor_reuse = 2: the first matrix is factorised and solved by its factor alone, a
-    near one by GMRES on that factor within 2 iterations; one further off takes more (here 4),
-    so the next is factorised afresh (and solved by it alone)."""
-    assert kept_factor_counts((4.0, 4.0001, 3.9, 3.9001)) == [(1, 0), (1, 2), (1, 6), (2, 6)]
-
-
-def test_a_kept_factorisation_gmres_cannot_use_is_redone_at_once():
-    """GMRES on the kept factor not converged in 3 x 2 iterations: the same system is
-    factorised and solved again, and the next one is solved on the new factor."""
-    assert kept_factor_counts((4.0, 3.0, 3.0001)) == [(1, 0), (2, 6), (2, 8)]
-
-
-def test_factor_reuse_needs_a_factorisation():
-    with pytest.raises(InputError, match="solver.factor_reuse = 5 needs solver.linear = lu or blr"):
-        make_problem("strip-footing-von-mises", "solver.linear=amg", "solver.factor_reuse=5")
+        curves[kind] = np.array([(r.load_factor, r.force) for r in result.steps])
+    stats = problem.newton.linear.stats
+    assert problem.newton.linear.description.startswith("MUMPS BLR LU")
+    assert stats["factorisations"] == stats["solves"] and stats["krylov_iterations"] == 0
+    assert curves["blr"][:, 0] == pytest.approx(curves["lu"][:, 0], rel=1e-12)
+    assert curves["blr"][:, 1] == pytest.approx(curves["lu"][:, 1], rel=1e-6)
 
 
 def test_auto_takes_lu_in_large_deformation():

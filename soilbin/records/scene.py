@@ -214,10 +214,6 @@ class Solver(Params):
     linear: LinearSolverKind = param(LinearSolverKind.AUTO,
                                      doc="linear solver: auto, lu, cholesky (LDLT), amg or blr "
                                          "(block low-rank LU)")
-    factor_reuse: int = param(0, lo=0, hi=1000,
-                              doc="0: factorise every Newton iterate; N: keep a factorisation "
-                                  "(linear = lu or blr) for the next iterates, solving by GMRES "
-                                  "on it, until GMRES needs more than N iterations")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -27,14 +27,6 @@ symmetric, LU otherwise, AMG above ``AMG_DOFS`` unknowns):
   (10⁶ unknowns) it peaks at 17 GB; MUMPS estimates the full-rank LU's
   factorisation alone at 24.6 GB.
 
-With ``solver.factor_reuse = N`` (``lu`` and ``blr``) a factorisation is
-kept for the Newton iterates after its own: their systems are solved by
-GMRES preconditioned by it (to ``REUSE_RTOL``), and the next iterate
-factorises afresh once GMRES needed more than N iterations, or at once if it
-did not converge in ``REUSE_LIMIT`` times N (a singular Newton matrix, or one
-too far from the kept factor's). A factorisation's own iterate is solved by
-it alone, as without reuse.
-
 Both factorisations use the PORD ordering above ``PORD_DOFS`` unknowns
 (measured faster than MUMPS's automatic choice on the footing and the tine,
 by 0-45% for LDLᵀ); PORD aborts the process on some tiny graphs (a
@@ -61,9 +53,6 @@ KRYLOV_RTOL = 1e-10
 SOR_SHIFT = 1e-10
 #: BLR compression tolerance, relative (MUMPS CNTL(7)), about the inexactness of a correction.
 BLR_TOLERANCE = 1e-4
-#: GMRES on a kept factorisation: its tolerance relative to the right-hand side, and the
-#: iterations it may take, in multiples of ``solver.factor_reuse``, before it gives up.
-REUSE_RTOL, REUSE_LIMIT = 1e-8, 3
 
 
 def all_symmetric(blocks, comm):
@@ -97,17 +86,13 @@ class LinearSolver:
     ``stats`` accumulates the CPU seconds of factorisation / set-up and solves
     and counts solves and Krylov iterations."""
 
-    def __init__(self, comm, kind, disc, n_dofs, symmetric, prefix, reuse=0):
+    def __init__(self, comm, kind, disc, n_dofs, symmetric, prefix):
         if kind is LinearSolverKind.AUTO:
             kind = (LinearSolverKind.AMG if n_dofs > AMG_DOFS else
                     LinearSolverKind.CHOLESKY if symmetric else LinearSolverKind.LU)
-        if reuse and kind not in (LinearSolverKind.LU, LinearSolverKind.BLR):
-            raise InputError(f"solver.factor_reuse = {reuse} needs solver.linear = lu or blr "
-                             f"(here {kind.value})")
         self.kind = kind
         self.stats = dict(factorisation_s=0.0, solve_s=0.0, solves=0, krylov_iterations=0,
                           factorisations=0, unsymmetric_solves=0)
-        self._reuse, self._kept, self._stale = reuse, False, True
         self._lu = PETSc.KSP().create(comm)
         _mumps(self._lu, prefix + "lu_", "lu", n_dofs)
         self._condensed = None
@@ -151,18 +136,16 @@ class LinearSolver:
 
     @property
     def description(self):
+        if self.kind is LinearSolverKind.LU:
+            return "MUMPS LU"
         if self.kind is LinearSolverKind.CHOLESKY:
             lu, every = self.stats["unsymmetric_solves"], self.stats["factorisations"]
             if not self._symmetric or (lu and lu == every):
                 return "MUMPS LU (the Jacobian is unsymmetric)"
             return "MUMPS LDLT" + (f", LU for {lu} of {every} iterates (unsymmetric)" if lu else "")
-        kept = (f", kept while GMRES on it needs at most {self._reuse} iterations"
-                if self._reuse else "")
-        if self.kind is LinearSolverKind.LU:
-            return "MUMPS LU" + kept
         if self.kind is LinearSolverKind.BLR:
             return "MUMPS BLR LU" + (f" ({self._condensed.description})"
-                                     if self._condensed is not None else "") + kept
+                                     if self._condensed is not None else "")
         return f"GMRES + GAMG ({self._condensed.description})"
 
     def set_operator(self, A, symmetric_tangent):
@@ -173,34 +156,11 @@ class LinearSolver:
             self.kind is LinearSolverKind.CHOLESKY and not (self._symmetric and symmetric_tangent()))
         if use_lu and self.kind is LinearSolverKind.CHOLESKY:
             self.stats["unsymmetric_solves"] += 1
-        self._active = self._lu if use_lu else self._ksp
-        self._operator = A if self._condensed is None else self._condensed.condense(A)
-        if self._reuse and not self._stale:
-            self._keep_factor()
-        else:
-            self._factorise()
-        self.stats["factorisation_s"] += time.process_time() - start
-
-    def _factorise(self):
-        """Factorise the operator (or set up the preconditioner); a factor alone solves."""
         self.stats["factorisations"] += 1
-        ksp = self._active
-        if self._reuse:   # GMRES on the kept factor until now
-            ksp.getPC().setReusePreconditioner(False)
-            ksp.setType("preonly")
-        ksp.setOperators(self._operator)
-        self._kept, self._stale = False, True
-        self._setup(ksp)
-        self._stale = False
-
-    def _keep_factor(self):
-        """Solve the new operator by GMRES preconditioned by the last factorisation."""
-        ksp = self._active
-        ksp.getPC().setReusePreconditioner(True)
-        ksp.setType("gmres")
-        ksp.setTolerances(rtol=REUSE_RTOL, atol=0.0, max_it=REUSE_LIMIT * self._reuse)
-        ksp.setOperators(self._operator)
-        self._kept = True
+        self._active = self._lu if use_lu else self._ksp
+        self._active.setOperators(A if self._condensed is None else self._condensed.condense(A))
+        self._setup(self._active)
+        self.stats["factorisation_s"] += time.process_time() - start
 
     @staticmethod
     def _setup(ksp):
@@ -210,24 +170,8 @@ class LinearSolver:
             raise LinearSolveError(f"the factorisation failed (PETSc error {err.ierr})") from None
 
     def solve(self, rhs, x):
-        """x = A⁻¹ rhs with the last operator (a kept factorisation that GMRES cannot converge
-        on is redone, and the system solved by the new one)."""
+        """x = A⁻¹ rhs with the last operator."""
         start = time.process_time()
-        reason = self._solve(rhs, x)
-        if self._kept:
-            iterations = self._active.getIterationNumber()
-            self._stale = self._stale or iterations > self._reuse
-            if reason < 0:
-                self._factorise()
-                self.stats["factorisation_s"] += time.process_time() - start
-                start = time.process_time()
-                reason = self._solve(rhs, x)
-        self.stats["solves"] += 1
-        self.stats["solve_s"] += time.process_time() - start
-        if reason < 0:
-            raise LinearSolveError(f"the linear solve failed (KSP reason {reason})")
-
-    def _solve(self, rhs, x):
         ksp = self._active
         try:
             if self._condensed is None:
@@ -236,6 +180,10 @@ class LinearSolver:
                 self._condensed.solve(ksp, rhs, x)
         except PETSc.Error as err:
             raise LinearSolveError(f"the linear solve failed (PETSc error {err.ierr})") from None
-        if self.kind is LinearSolverKind.AMG or self._kept:
+        reason = ksp.getConvergedReason()
+        self.stats["solves"] += 1
+        if self.kind is LinearSolverKind.AMG:
             self.stats["krylov_iterations"] += ksp.getIterationNumber()
-        return ksp.getConvergedReason()
+        self.stats["solve_s"] += time.process_time() - start
+        if reason < 0:
+            raise LinearSolveError(f"the linear solve failed (KSP reason {reason})")

@@ -109,7 +109,7 @@ class NewtonSolver:
         self.on_iterate = None
         n_dofs = w.vector.getSize()
         self.linear = LinearSolver(comm, options.linear, disc, n_dofs,
-                                   symmetric, prefix, reuse=options.factor_reuse)
+                                   symmetric, prefix)
         self.stats = dict(constitutive_s=0.0, assembly_s=0.0, iterations=0, failed_iterations=0,
                           residual_evaluations=0)
         self._clock = _Clock(self.stats)
