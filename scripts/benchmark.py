@@ -126,6 +126,7 @@ def run_case(scene_name, overrides):
                 residuals=newton["residual_evaluations"], setup_s=setup, solve_s=solve,
                 memory_MB=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                 kind=kind, value=value, krylov=linear["krylov_iterations"],
+                factorisations=linear["factorisations"],
                 factorisation_s=linear["factorisation_s"], linear_solve_s=linear["solve_s"],
                 assembly_s=newton["assembly_s"], constitutive_s=newton["constitutive_s"])
 
