@@ -66,7 +66,7 @@ class _Cells:
     def local(self, kind, stored):
         """This rank's array (ghosts included) from the stored (n_global, k, ...) one."""
         table = self.tables[kind]
-        out = np.empty((table.max(initial=-1) + 1,) + stored.shape[2:])
+        out = np.empty((table.max(initial=-1) + 1,) + stored.shape[2:], dtype=stored.dtype)
         out[table] = stored[self.number]
         return out.ravel() if kind == DOFS else out
 
@@ -77,7 +77,7 @@ def _gather_by_number(comm, numbers, values):
     if comm.rank != 0:
         return None
     numbers = np.concatenate(numbers)
-    out = np.empty((len(numbers),) + values[0].shape[1:])
+    out = np.empty((len(numbers),) + values[0].shape[1:], dtype=values[0].dtype)
     out[numbers] = np.concatenate(values)
     return out
 

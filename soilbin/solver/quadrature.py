@@ -172,7 +172,8 @@ class MaterialPoints:
         state = {}
         for name, history in self.committed.items():
             for key, value in history.items():
-                full = np.zeros((len(self._cells) * self.points_per_cell,) + value.shape[1:])
+                full = np.zeros((len(self._cells) * self.points_per_cell,) + value.shape[1:],
+                                dtype=value.dtype)
                 full[self.index[name]] = value
                 state[f"{name}/{key}"] = (POINTS, full)
         return {**state, "converged_tangent": (POINTS, self._converged_tangent)}
