@@ -1,5 +1,6 @@
 """The command line: bad input is a short message and exit status 2, never a traceback."""
 import json
+import resource
 
 import meshio
 import numpy as np
@@ -182,3 +183,8 @@ def test_verbose_prints_every_newton_iterate(capsys, tmp_path):
     assert sum(line[1] == "0" for line in lines) == summary["n_steps"]
     last = [lines[i] for i in range(len(lines)) if i + 1 == len(lines) or lines[i + 1][1] == "0"]
     assert all(float(line[3]) <= float(line[5]) for line in last)
+    # the peak resident memory (one rank here: this process's), never falling
+    peaks = [float(line[9]) for line in lines]
+    assert all(line[8] == "peak" and line[10] == "GB" for line in lines)
+    assert peaks == sorted(peaks)
+    assert 0.0 < peaks[-1] <= resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20

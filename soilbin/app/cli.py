@@ -59,7 +59,8 @@ def _parser(point_details=True):
                      help="no progress lines; the last stdout line is the summary as one JSON object")
     run.add_argument("-v", "--verbose", action="store_true",
                      help="also a progress line per Newton iteration (its residual, the "
-                          "target and the seconds since the last line): for long runs")
+                          "target, the seconds since the last line and the peak resident "
+                          "memory of all ranks): for long runs")
     run.add_argument("--resume", type=Path, metavar="FOLDER",
                      help="go on from the last converged step of the stopped run in FOLDER (its "
                           "checkpoint/; the same scene but for [solver], [output] and "
@@ -167,15 +168,22 @@ def _progress(record):
 
 
 class _IterateProgress:
-    """A line per Newton iterate on stderr: residual, target, seconds since the last line."""
+    """A line per Newton iterate on stderr (rank 0's): residual, target, seconds since the
+    last line and the peak resident memory summed over the ranks. Called on every rank (the
+    sum is a collective)."""
 
-    def __init__(self):
+    def __init__(self, comm):
+        self._comm = comm
         self._last = time.perf_counter()
 
     def __call__(self, iteration, residual, target):
+        import resource
         now = time.perf_counter()
-        print(f"  Newton {iteration:3d}  residual {residual:10.4g}  target {target:9.3g}  "
-              f"{now - self._last:8.2f} s", file=sys.stderr, flush=True)
+        peak_kb = self._comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+        if self._comm.rank == 0:
+            print(f"  Newton {iteration:3d}  residual {residual:10.4g}  target {target:9.3g}  "
+                  f"{now - self._last:8.2f} s  peak {peak_kb / 2**20:6.2f} GB",
+                  file=sys.stderr, flush=True)
         self._last = now
 
 
@@ -192,8 +200,8 @@ def _run(args):
         quiet = args.json or not rank0
         summary = run_scene(scene, out, progress=None if quiet else _progress,
                             overrides=args.overrides, resume=args.resume,
-                            iterate_progress=None if quiet or not args.verbose else
-                            _IterateProgress())
+                            iterate_progress=_IterateProgress(comm)
+                            if args.verbose and not args.json else None)
     except (InputError, interrupt.Interrupted):
         raise   # every rank raises these alike
     except Exception as err:
