@@ -4,6 +4,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")  # before NumPy/PETSc load BLAS: t
 import argparse
 import json
 import logging
+import resource
 import sys
 import tempfile
 import time
@@ -177,7 +178,6 @@ class _IterateProgress:
         self._last = time.perf_counter()
 
     def __call__(self, iteration, residual, target):
-        import resource
         now = time.perf_counter()
         peak_kb = self._comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
         if self._comm.rank == 0:

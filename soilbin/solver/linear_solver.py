@@ -108,7 +108,7 @@ class LinearSolver:
             self._condensed = CellCondensation(disc) if bbar else None
             # the UCFS variant (ICNTL(36) = 1: compress before the update) and compressed
             # contribution blocks (ICNTL(37) = 1): on the tine's refine 4 (serial) a peak of
-            # 16.6 GB instead of 18.4 and Newton iterations of 103-146 s instead of 118-172;
+            # 16.6 GB instead of 18.4 and Newton iterations of 95-146 s instead of 118-172;
             # refine 2: 9% less CPU, 4.5% less memory (README, *The large tine*)
             _mumps(self._ksp, prefix + "blr_", "lu", n_dofs,
                    mat_mumps_icntl_35=1, mat_mumps_cntl_7=BLR_TOLERANCE,
