@@ -5,6 +5,7 @@ from petsc4py import PETSc
 
 from conftest import make_problem
 from soilbin.errors import ConvergenceError
+from soilbin.solver import linear_solver
 from soilbin.solver.condensation import CellCondensation
 from soilbin.solver.newton import CP_TOLERANCE, NewtonFailure
 from soilbin.solver.stepping import run_load_steps
@@ -58,6 +59,16 @@ def test_blr_gives_the_curve_of_lu_on_the_tine():
 def test_auto_takes_lu_in_large_deformation():
     problem = make_problem("tine-2in-90deg", "analysis.large_deformation=true")
     assert problem.newton.linear.description == "MUMPS LU"
+
+
+def test_auto_takes_blr_above_its_size(monkeypatch):
+    """Above BLR_DOFS unknowns ``auto`` factorises with block low rank (the threshold lowered
+    so that the footing passes it), on the same curve as LU."""
+    _, reference = curve("solver.linear=lu")
+    monkeypatch.setattr(linear_solver, "BLR_DOFS", 1000)
+    problem, other = curve("solver.linear=auto")
+    assert problem.newton.linear.description.startswith("MUMPS BLR LU")
+    assert other[:, 1] == pytest.approx(reference[:, 1], rel=1e-6)
 
 
 def test_condensed_system_reproduces_the_mixed_solution():

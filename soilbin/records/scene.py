@@ -50,7 +50,7 @@ class LineSearch(enum.Enum):
 
 
 class LinearSolverKind(enum.Enum):
-    AUTO = "auto"          # LDLT if the tangent is symmetric, else LU; AMG on large systems
+    AUTO = "auto"          # LDLT if the tangent is symmetric, else LU; BLR on large systems
     LU = "lu"              # MUMPS LU
     CHOLESKY = "cholesky"  # MUMPS LDLT of the condensed system
     AMG = "amg"            # CG or GMRES with GAMG on the condensed system
