@@ -21,7 +21,9 @@ def curve(*overrides):
     return problem, np.array([(r.load_factor, r.force) for r in result.steps])
 
 
-def test_every_linear_solver_gives_the_same_curve():
+def test_every_linear_solver_gives_the_same_curve(monkeypatch):
+    """Each choice follows LU's curve; ``auto`` takes LDLT here and, above BLR_DOFS unknowns
+    (the threshold lowered so that the footing passes it), the block low-rank LU."""
     lu, reference = curve("solver.linear=lu")
     assert lu.newton.linear.description == "MUMPS LU"
     for kind, name in (("cholesky", "MUMPS LDLT"), ("amg", "GMRES + GAMG"), ("auto", "MUMPS LDLT")):
@@ -30,6 +32,10 @@ def test_every_linear_solver_gives_the_same_curve():
         assert other[:, 0] == pytest.approx(reference[:, 0], rel=1e-12)
         assert other[:, 1] == pytest.approx(reference[:, 1], rel=1e-6)
     assert problem.newton.linear.stats["unsymmetric_solves"] == 0   # von Mises: symmetric
+    monkeypatch.setattr(linear_solver, "BLR_DOFS", 1000)
+    problem, other = curve("solver.linear=auto")
+    assert problem.newton.linear.description.startswith("MUMPS BLR LU")
+    assert other[:, 1] == pytest.approx(reference[:, 1], rel=1e-6)
 
 
 # the tine on a coarse mesh (tests/test_reliability.py's), over its cap's first yield
@@ -59,16 +65,6 @@ def test_blr_gives_the_curve_of_lu_on_the_tine():
 def test_auto_takes_lu_in_large_deformation():
     problem = make_problem("tine-2in-90deg", "analysis.large_deformation=true")
     assert problem.newton.linear.description == "MUMPS LU"
-
-
-def test_auto_takes_blr_above_its_size(monkeypatch):
-    """Above BLR_DOFS unknowns ``auto`` factorises with block low rank (the threshold lowered
-    so that the footing passes it), on the same curve as LU."""
-    _, reference = curve("solver.linear=lu")
-    monkeypatch.setattr(linear_solver, "BLR_DOFS", 1000)
-    problem, other = curve("solver.linear=auto")
-    assert problem.newton.linear.description.startswith("MUMPS BLR LU")
-    assert other[:, 1] == pytest.approx(reference[:, 1], rel=1e-6)
 
 
 def test_condensed_system_reproduces_the_mixed_solution():
