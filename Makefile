@@ -1,12 +1,13 @@
-# soilbin: `make run` solves the default scene, `make test` runs the test suite.
-# Both install what is missing first (Debian packages, the venv, soilbin itself).
+# soilbin: `make run` solves the default scene, `make test` runs the test suite,
+# `make docs` builds the documentation site into docs/_build/html.
+# Each installs what is missing first (Debian packages, the venv, soilbin itself).
 VENV    := .venv
 PY      := $(VENV)/bin/python
 STAMP   := $(VENV)/.soilbin-installed
 SCENE   ?= scenes/tine-2in-90deg.toml
 export OMP_NUM_THREADS := 1
 
-.PHONY: run test test-slow bench bench-quick setup system clean
+.PHONY: run test test-slow docs bench bench-quick setup system system-docs clean
 
 run: setup
 	$(VENV)/bin/soilbin run $(SCENE)
@@ -18,7 +19,13 @@ test: setup
 test-slow: setup
 	$(PY) -m pytest -q -m slow tests
 
-# run time against error; results in runs/benchmark/ (README: python scripts/benchmark.py --readme README.md)
+# the documentation site (Sphinx + MyST, Debian's); warnings are errors. The API pages
+# import soilbin, so the venv's python runs Sphinx.
+docs: setup system-docs
+	$(PY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
+
+# run time against error; results in runs/benchmark/ (its tables into docs/performance.md:
+# python scripts/benchmark.py --no-run)
 bench: setup
 	$(PY) scripts/benchmark.py
 
@@ -30,13 +37,18 @@ setup: system $(STAMP)
 system:
 	@sh scripts/install-system.sh
 
+system-docs:
+	@sh scripts/install-system.sh docs
+
 # pip may add what Debian lacks (pyvista, vtk; for the tests hypothesis, meshio), with
-# numpy held at Debian's (DOLFINx is built against it).
+# numpy held at Debian's (DOLFINx is built against it) and markdown-it-py below 3 (pyvista's
+# rich wants >= 2.2, Debian's myst-parser 0.18 < 3).
 $(STAMP): pyproject.toml
 	/usr/bin/python3 -m venv --system-site-packages $(VENV)
 	/usr/bin/python3 -c "import numpy; print('numpy==' + numpy.__version__)" > $(VENV)/constraints.txt
+	echo "markdown-it-py>=2.2,<3" >> $(VENV)/constraints.txt
 	$(PY) -m pip install --quiet --no-build-isolation -c $(VENV)/constraints.txt -e ".[test]"
 	touch $@
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache
+	rm -rf $(VENV) runs .pytest_cache docs/_build
