@@ -16,7 +16,7 @@ author = "the soilbin developers"
 copyright = "the soilbin developers"
 
 extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax",
-              "offline_mathjax"]
+              "scene_keys", "offline_mathjax"]
 source_suffix = {".md": "markdown"}
 exclude_patterns = ["_build", "figures/README.md"]
 

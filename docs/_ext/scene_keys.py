@@ -1,0 +1,68 @@
+"""The key reference: the line ``<!-- scene-keys -->`` of keys.md becomes a section per
+table a scene may hold, each key with its default, accepted range and meaning, read from
+the same records as ``soilbin keys`` (:func:`soilbin.app.keys.reference`)."""
+import math
+from itertools import groupby
+
+from sphinx.errors import ExtensionError
+
+from soilbin.app.keys import REQUIRED, reference
+from soilbin.records.toml_out import _scalar as toml_value
+
+PAGE = "keys"
+MARKER = "<!-- scene-keys -->"
+#: Escaped in table text so that Markdown and MyST's math read it literally.
+SPECIAL = "\\`*_[]<>$|"
+#: Table titles shown in a heading by what they name in a scene.
+TITLES = {"top level": "Top-level keys", "mesh": "mesh: one builder's keys", "materials": "materials.NAME: one model's keys",
+          "supports": "[[supports]]", "tractions": "[[tractions]]", "headline": "headline.NAME"}
+
+
+def _text(text):
+    return "".join("\\" + c if c in SPECIAL else c for c in str(text))
+
+
+def _default(value):
+    """A default as TOML; 'required' for a key that must be given, and the meaning's word for
+    a default that the model or builder works out (None)."""
+    if value == REQUIRED:
+        return REQUIRED
+    if value is None:
+        return "see meaning"
+    if isinstance(value, float) and math.isnan(value):
+        return "`nan`"
+    return f"`{toml_value(value)}`"
+
+
+def _table(rows):
+    lines = ["| key | default | accepted | meaning |", "| --- | --- | --- | --- |"]
+    lines += [f"| `{key}` | {_default(default)} | {_text(accepted)} | {_text(doc)} |"
+              for key, default, accepted, doc in rows]
+    return lines
+
+
+def markdown():
+    """The generated sections, as MyST Markdown."""
+    lines = []
+    for table, entries in groupby(reference(), key=lambda entry: entry[0]):
+        lines += ["", f"## {_text(TITLES.get(table, table))}", ""]
+        for _, kind, summary, rows in entries:
+            if kind:
+                lines += [f"### {_text(kind)}", ""]
+            if summary:
+                lines += [_text(summary), ""]
+            lines += _table(rows) + [""]
+    return "\n".join(lines)
+
+
+def insert_reference(app, docname, source):
+    if docname != PAGE:
+        return
+    if MARKER not in source[0]:
+        raise ExtensionError(f"{PAGE}.md: no {MARKER} line for the key reference")
+    source[0] = source[0].replace(MARKER, markdown())
+
+
+def setup(app):
+    app.connect("source-read", insert_reference)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}
