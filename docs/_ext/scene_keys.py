@@ -1,21 +1,24 @@
 """The key reference: the line ``<!-- scene-keys -->`` of keys.md becomes a section per
 table a scene may hold, each key with its default, accepted range and meaning, read from
-the same records as ``soilbin keys`` (:func:`soilbin.app.keys.reference`)."""
+the same records as ``soilbin keys`` (:func:`soilbin.app.keys.reference`); the line
+``<!-- study-keys -->`` becomes those of a study file's tables, one heading level down."""
 import math
 from itertools import groupby
 
 from sphinx.errors import ExtensionError
 
-from soilbin.app.keys import REQUIRED, reference
+from soilbin.app.keys import REQUIRED, reference, study_reference
 from soilbin.records.toml_out import _scalar as toml_value
 
 PAGE = "keys"
-MARKER = "<!-- scene-keys -->"
+#: marker line -> (the tables it becomes, the level of their headings)
+MARKERS = {"<!-- scene-keys -->": (reference, 2), "<!-- study-keys -->": (study_reference, 3)}
 #: Escaped in table text so that Markdown and MyST's math read it literally.
 SPECIAL = "\\`*_[]<>$|"
 #: Table titles shown in a heading by what they name in a scene.
 TITLES = {"top level": "Top-level keys", "mesh": "mesh: one builder's keys", "materials": "materials.NAME: one model's keys",
-          "supports": "[[supports]]", "tractions": "[[tractions]]", "headline": "headline.NAME"}
+          "supports": "[[supports]]", "tractions": "[[tractions]]", "headline": "headline.NAME", "run": "[run]", "table": "[table]",
+          "figures": "[[figures]]"}
 
 
 def _text(text):
@@ -41,14 +44,15 @@ def _table(rows):
     return lines
 
 
-def markdown():
-    """The generated sections, as MyST Markdown."""
+def markdown(tables, level):
+    """The sections of ``tables`` (as :func:`soilbin.app.keys.reference`), headed at
+    ``level``, as MyST Markdown."""
     lines = []
-    for table, entries in groupby(reference(), key=lambda entry: entry[0]):
-        lines += ["", f"## {_text(TITLES.get(table, table))}", ""]
+    for table, entries in groupby(tables, key=lambda entry: entry[0]):
+        lines += ["", f"{'#' * level} {_text(TITLES.get(table, table))}", ""]
         for _, kind, summary, rows in entries:
             if kind:
-                lines += [f"### {_text(kind)}", ""]
+                lines += [f"{'#' * (level + 1)} {_text(kind)}", ""]
             if summary:
                 lines += [_text(summary), ""]
             lines += _table(rows) + [""]
@@ -58,9 +62,10 @@ def markdown():
 def insert_reference(app, docname, source):
     if docname != PAGE:
         return
-    if MARKER not in source[0]:
-        raise ExtensionError(f"{PAGE}.md: no {MARKER} line for the key reference")
-    source[0] = source[0].replace(MARKER, markdown())
+    for marker, (tables, level) in MARKERS.items():
+        if marker not in source[0]:
+            raise ExtensionError(f"{PAGE}.md: no {marker} line for the key reference")
+        source[0] = source[0].replace(marker, markdown(tables(), level))
 
 
 def setup(app):

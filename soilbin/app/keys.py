@@ -1,6 +1,7 @@
 """Every key a scene takes, with its value in that scene, its accepted range and its meaning
-(``soilbin keys SCENE``), and with its default in every table a scene may hold (the
-documentation's key reference, :func:`reference`); records level: no FEniCSx."""
+(``soilbin keys SCENE``), and with its default in every table a scene or a study file may
+hold (the documentation's key reference: :func:`reference`, :func:`study_reference`); records
+level: no FEniCSx."""
 import dataclasses
 import enum
 import typing
@@ -10,6 +11,7 @@ from ..models import MODELS
 from ..records.geostatic import Geostatic
 from ..records.scene import (Analysis, HeadlineResult, Loading, Output, Solver, Support, Tool,
                              Traction)
+from .study import Figure, RunOptions, Table
 
 #: What the key reference shows as the default of a key that must be given.
 REQUIRED = "required"
@@ -97,6 +99,12 @@ def reference():
                   "headline": "headline.NAME"}.get(table, table)
         tables.append((table, "", _summary(cls), default_keys(cls, prefix)))
     return tables
+
+
+def study_reference():
+    """(table, kind, summary, rows) of the record tables of a study file, as reference()."""
+    return [(table, "", _summary(cls), default_keys(cls, table))
+            for table, cls in (("run", RunOptions), ("table", Table), ("figures", Figure))]
 
 
 def scene_keys(scene):
