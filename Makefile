@@ -4,7 +4,7 @@
 VENV    := .venv
 PY      := $(VENV)/bin/python
 STAMP   := $(VENV)/.soilbin-installed
-SCENE   ?= scenes/tine-2in-90deg.toml
+SCENE   ?= scenes/tine-2in-108lb.toml
 export OMP_NUM_THREADS := 1
 
 .PHONY: run test test-slow docs bench bench-quick setup system system-docs clean

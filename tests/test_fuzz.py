@@ -8,10 +8,10 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from soilbin.errors import InputError
 from soilbin.records.scene import scene_from_table
-from soilbin.records.toml_in import read_toml
+from soilbin.records.toml_in import read_scene_tables
 from conftest import SCENES
 
-RAW = {path: read_toml(path) for path in sorted(SCENES.glob("*.toml"))}
+RAW = {path: read_scene_tables(path) for path in sorted(SCENES.glob("*.toml"))}
 FUZZ = settings(max_examples=300, derandomize=True, deadline=None, database=None,
                 suppress_health_check=[HealthCheck.too_slow])
 

@@ -13,7 +13,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from ..errors import InputError, SoilbinError
-from ..records.toml_in import SCENES_DIR, read_toml, scene_path
+from ..records.toml_in import SCENES_DIR, read_scene_tables, scene_path
 from . import interrupt
 
 EPILOG = """\
@@ -153,7 +153,7 @@ def _keys(args):
 
 def _list_scenes(args):
     for path in sorted(SCENES_DIR.glob("*.toml"), key=lambda p: p.stem):
-        title = read_toml(path).get("title", "")
+        title = read_scene_tables(path).get("title", "")
         print(f"{path.stem:32s} {title}")
     return 0
 

@@ -29,7 +29,7 @@ from ..errors import ConvergenceError, InputError, ReturnMapError
 from ..models import MODELS
 from ..params import from_table
 from ..plotting import pyplot
-from ..records.toml_in import assignment, read_toml, scene_path
+from ..records.toml_in import assignment, read_scene_tables, scene_path
 from ..tensors import IDENTITY, SQRT2, deviator, from_mandel, trace
 from .paths import PATHS
 
@@ -72,7 +72,7 @@ def material_table(spec):
     if not sep or not file or not material:
         raise InputError(f"{spec!r}: expected SCENE.toml:MATERIAL")
     path = scene_path(file)
-    materials = read_toml(path).get("materials", {})
+    materials = read_scene_tables(path).get("materials", {})
     materials = materials if isinstance(materials, dict) else {}
     if not isinstance(materials.get(material), dict):
         raise InputError(f"{path}: no material {material!r}; defined: {', '.join(materials)}")

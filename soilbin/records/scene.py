@@ -19,7 +19,7 @@ from ..models.mohr_coulomb_interface import MohrCoulombInterface
 from ..params import Params, from_table, param
 from . import toml_out
 from .geostatic import Geostatic, read_geostatic
-from .toml_in import assignment, read_toml
+from .toml_in import assignment, read_scene_tables
 
 
 class Control(enum.Enum):
@@ -487,7 +487,7 @@ def _tool(raw, source, boundaries, contact):
 
 def load_scene(path, overrides=()):
     """Read, override and validate a scene; every error names the file and the key."""
-    return scene_from_table(read_toml(path), path, overrides)
+    return scene_from_table(read_scene_tables(path), path, overrides)
 
 
 def scene_from_table(raw, path, overrides=()):

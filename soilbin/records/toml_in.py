@@ -36,6 +36,49 @@ def read_toml(path):
         raise InputError(f"{path}: TOML syntax error: {err}") from None
 
 
+def read_scene_tables(path, _chain=()):
+    """The tables of a scene file laid over those of its ``base`` scene, if it names one.
+
+    ``base`` is the name of a scene in scenes/ or a path relative to the scene's folder; the
+    base may have a base of its own. Tables merge key by key, any other value (arrays of
+    tables included) is replaced whole. A relative path of the base's ``[mesh]`` (a key
+    ``file`` or ``*_file``) stays relative to the base's folder."""
+    path = Path(path)
+    raw = read_toml(path)
+    base = raw.pop("base", None)
+    if base is None:
+        return raw
+    if not isinstance(base, str) or not base:
+        raise InputError(f"{path}: base = {base!r}: the name of a scene in scenes/ or a scene "
+                         "file's path relative to this one's folder")
+    near = path.parent / base
+    base_path = near if near.exists() or base.endswith(".toml") else SCENES_DIR / f"{base}.toml"
+    chain = _chain + (path.resolve(),)
+    if base_path.resolve() in chain:
+        raise InputError(f"{path}: base = {base!r}: the scenes name each other as base "
+                         f"({' -> '.join(p.name for p in chain + (base_path.resolve(),))})")
+    if not base_path.is_file():
+        raise InputError(f"{path}: base = {base!r}: no such scene ({base_path})")
+    tables = read_scene_tables(base_path, chain)
+    mesh = tables.get("mesh")
+    if isinstance(mesh, dict):
+        for key, value in mesh.items():
+            if (key == "file" or key.endswith("_file")) and isinstance(value, str):
+                mesh[key] = str(base_path.parent / value)
+    return _laid_over(tables, raw)
+
+
+def _laid_over(base, top):
+    """``top``'s tables merged into ``base``'s, key by key; other values replace base's."""
+    merged = dict(base)
+    for key, value in top.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = _laid_over(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
+
+
 def parse_value(text):
     """A --set value: any TOML value, or a bare word taken as a string."""
     try:
