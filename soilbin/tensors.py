@@ -71,7 +71,7 @@ def deviator(v):
 
 
 def rotation_matrix(vector_deg):
-    """Rotation by |v| degrees about v (Rodrigues' formula)."""
+    """Rotation by ``|v|`` degrees about v (Rodrigues' formula)."""
     v = np.radians(np.asarray(vector_deg, dtype=float))
     angle = np.linalg.norm(v)
     if angle == 0.0:

@@ -15,8 +15,10 @@ isotropic law this is σ_{n+1} = R σ_n Rᵀ + R½ Δσ R½ᵀ, second-order acc
 (rotating Δε by the whole R instead makes it first order). For a rigid
 increment Δε = 0 and R is the rotation itself, exactly.
 
-Internal virtual work on Ω_{n+1}, pulled back to Ω_n:
+Internal virtual work on Ω_{n+1}, pulled back to Ω_n::
+
     ∫ σ_{n+1} : ∇_{n+1} v dv = ∫ J σ_{n+1} : (∇v F⁻¹) dV,
+
 with mean-dilatation elements as in ``virtual_work`` (σ → dev σ + p I, plus
 the pressure and dilatation constraints, with Δε̄ = dev Δε + Δθ/3 I). The
 Jacobian is the Gateaux derivative of this form, in which the stress is
@@ -75,5 +77,5 @@ def internal_force(disc, points, w, v):
 
 
 def surface_stretch(F, n):
-    """da/dA of a facet with normal n on Ω_n: J |F⁻ᵀ n| (Nanson)."""
+    """da/dA of a facet with normal n on Ω_n: J ``|F⁻ᵀ n|`` (Nanson)."""
     return ufl.det(F) * ufl.sqrt(ufl.dot(ufl.inv(F).T * n, ufl.inv(F).T * n))

@@ -3,12 +3,16 @@
 This module knows nothing of return mapping: stress and tangent arrive as
 quadrature-space functions (Mandel vectors / matrices, see ``tensors``).
 
-Plain displacement elements:
+Plain displacement elements::
+
     R = ∫ σ : ε(v)                       J = ∫ ε(v) : C : ε(du)
+
 Mean-dilatation elements (w = (u, θ, p), test (v, ψ, q)), with the enhanced
-strain ε̄(u, θ) = dev ε(u) + θ/3 I:
+strain ε̄(u, θ) = dev ε(u) + θ/3 I::
+
     R = ∫ σ : ε̄(v, ψ) + ∫ p (div v − ψ) + ∫ q (div u − θ)
     J = ∫ ε̄(v, ψ) : C : ε̄(du, dθ) + ∫ dp (div v − ψ) + ∫ q (div du − dθ)
+
 Both are symmetric when C is.
 """
 import ufl

@@ -38,9 +38,9 @@ ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER, TIP = 0.0, 1.0, 2.0, 3.0, 4.0, 
 
 
 def stress_invariants(stress):
-    """(p, s, |s|) of (n, 6) Mandel stresses: the mean stress p = tr(sigma) / 3
+    """(p, s, ``|s|``) of (n, 6) Mandel stresses: the mean stress p = tr(sigma) / 3
     (tension positive; the invariant models negate it), the deviator s and its
-    norm |s| = sqrt(2 J2)."""
+    norm ``|s|`` = sqrt(2 J2)."""
     s = deviator(stress)
     return trace(stress) / 3.0, s, np.linalg.norm(s, axis=-1)
 

@@ -8,7 +8,7 @@ needs a local Newton (the failure surface does not harden: a bracketed scalar
 equation; corners and cut-off: closed form).
 
 Compression positive inside (see :mod:`.invariant_return`): I1 = 3p = -tr(sigma),
-J = sqrt(J2). The two models differ only in the failure function F:
+J = sqrt(J2). The two models differ only in the failure function F::
 
     failure surface  f_F = J - F(I1) <= 0,
         DiMaggio–Sandler (B.9)  F(I1) = A - C exp(-beta I1),
@@ -21,7 +21,7 @@ J = sqrt(J2). The two models differ only in the failure function F:
     hardening (B.11) eps_v^p = W (1 - exp(-D X)),
 
 with associated flow on the cap and the cut-off, and on the failure surface
-the flow potential
+the flow potential::
 
     g_F = J - eta_d F(I1),   0 <= eta_d <= 1   (``dilatancy``),
 
@@ -33,7 +33,7 @@ DiMaggio–Sandler to zero on the von Mises plateau). A dilation angle, a
 fixed slope of the potential, would dilate more than associated flow where
 the surface flattens; the factor eta_d instead scales the surface's own
 slope: the plastic strain on the failure surface is dgamma dg_F/dsigma, its
-volume change (dilation) over its shear strain sqrt2 |dev deps^p| is
+volume change (dilation) over its shear strain sqrt2 ``|dev deps^p|`` is
 3 eta_d F'(I1), a fraction eta_d of the associated flow's at every
 confinement (on the modified cap's high-pressure line Drucker–Prager's
 3 alpha_psi with alpha_psi = eta_d B). The cap stays associated (B.10).
@@ -104,7 +104,7 @@ state").
 
 Regions of the trial state (I1_tr, J_tr), with L = L_n (the failure surface
 is fixed; the cap's normal at its corner (L, F(L)) is purely deviatoric; the
-failure surface's "normal" is the return direction along its potential):
+failure surface's "normal" is the return direction along its potential)::
 
     cap         I1_tr > L and f_C > 0            local Newton (p, J, dgamma, kappa)
     cap corner  I1_tr <= L, beyond the failure return at L      (L, F(L)), L moving

@@ -144,7 +144,7 @@ def consistent_tangent(n, ratio, K, G, eta, eta_g=None):
         b_g = sqrt2 G n + eta_g K I  (the plastic correction's direction),
         b_f = sqrt2 G n + eta K I    (d f_tr / d eps),
 
-    with n = s_tr / |s_tr| (m, 6) and ratio = G dgamma / sqrt(J2_tr) (m,);
+    with n = ``s_tr / |s_tr|`` (m, 6) and ratio = G dgamma / sqrt(J2_tr) (m,);
     unsymmetric unless eta_g = eta.
     """
     eta_g = eta if eta_g is None else eta_g

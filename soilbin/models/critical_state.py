@@ -56,7 +56,7 @@ smooth return would lie closer to the origin than exp(-700) p_c (sigma = 0).
 
 History: ``stress``, ``p_c`` (compression positive), ``eps_p_vol`` (trace
 of the plastic strain, tension positive as every strain in the code),
-``eps_p_eq`` (sqrt(2/3) |eps_p| accumulated) and ``yield_state``: 0
+``eps_p_eq`` (sqrt(2/3) ``|eps_p|`` accumulated) and ``yield_state``: 0
 elastic, 1 on the yield surface dry of critical (dilating), 2 at the origin
 (Cam-Clay), 4 on the yield surface wet of critical (compacting), 6 at the
 Cam-Clay tip (codes of :mod:`.base`).

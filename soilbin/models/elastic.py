@@ -92,7 +92,7 @@ class IsotropicElasticity(Model):
         return stress + deps @ self.stiffness
 
     def equivalent_plastic_strain(self, deps, dsigma):
-        """sqrt(2/3) |deps_p| with deps_p = deps - C_e^-1 : dsigma."""
+        """sqrt(2/3) ``|deps_p|`` with deps_p = deps - C_e^-1 : dsigma."""
         deps_p = deps - dsigma @ self.compliance
         return np.sqrt(2.0 / 3.0) * np.linalg.norm(deps_p, axis=-1)
 

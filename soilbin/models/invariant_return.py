@@ -1,11 +1,11 @@
 """Return-mapping parts shared by the isotropic two-invariant soil models
 (Cam-Clay, modified Cam-Clay, the DiMaggio–Sandler and modified caps).
 
-Inside these models the geomechanics convention is used, compression positive:
+Inside these models the geomechanics convention is used, compression positive::
 
     p = -tr(sigma) / 3,   J = sqrt(J2) = |s| / sqrt2,   I1 = 3 p,   e_v = -tr(deps),
 
-and the stress goes back to the code's tension-positive Mandel vector as
+and the stress goes back to the code's tension-positive Mandel vector as::
 
     sigma = -p I + s_tr J / J_tr = -p I + sqrt2 J n,   n = s_tr / |s_tr|:
 
@@ -14,7 +14,7 @@ an associated return with isotropic elasticity and a yield function of
 problem is one in the (p, J) plane.
 
 Elasticity (the model's ``bulk``: :class:`.elastic.LinearBulk`,
-:class:`.elastic.ExponentialBulk`): a constant shear modulus G, so J_tr = |s_n + 2G dev(deps)| / sqrt2, and a volumetric
+:class:`.elastic.ExponentialBulk`): a constant shear modulus G, so J_tr = ``|s_n + 2G dev(deps)|`` / sqrt2, and a volumetric
 law written through the elastic volumetric strain E(p; p_n) that takes the
 mean stress from p_n to p (linear: (p - p_n)/K; exponential, the
 kappa-line of critical-state soil mechanics: kappa* ln((p + p_min)/(p_n + p_min))).

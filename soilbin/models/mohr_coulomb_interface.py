@@ -4,7 +4,7 @@ The law has the bulk law's shape, ``traction_update(jump, normal, state)
 -> (t, dt_djump, new_state)``, vectorised over contact points. ``jump`` is
 the displacement of the soil relative to the tool and ``normal`` the unit
 normal pointing from the soil into the tool, so g = jump·n > 0 is
-penetration. ``t`` is the traction the soil exerts on the tool:
+penetration. ``t`` is the traction the soil exerts on the tool::
 
     g < 0 (separation): t = 0, and the slip follows the jump (no memory);
     g >= 0 (contact; closed at zero gap, so a body resting on the tool is
@@ -14,7 +14,7 @@ penetration. ``t`` is the traction the soil exerts on the tool:
 
 The history is the tangential slip (n, 3). The tangent is consistent (and
 not symmetric in slip): dt/djump = k_n n⊗n + k_n tan δ m⊗n
-+ (τ_max k_s / |t_tr|)(P_t - m⊗m).
++ (τ_max k_s / ``|t_tr|``)(P_t - m⊗m).
 """
 import dataclasses
 import math

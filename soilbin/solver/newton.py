@@ -56,7 +56,7 @@ class NewtonResult:
 MAX_BACKTRACKS = 10
 #: Fraction of the Newton decrease of ‖R‖²/2 a backtracking step must achieve.
 ARMIJO = 1e-4
-#: Trial steps of the critical-point line search, and its tolerance on |g(λ)|/|g(0)|
+#: Trial steps of the critical-point line search, and its tolerance on ``|g(λ)|/|g(0)|``
 #: (the tine's first step out of K0: 26 Newton iterations with 6 trials and 0.2; with
 #: 4 trials, 33 with 0.5 and 46 with Crisfield's 0.8).
 CP_TRIALS, CP_TOLERANCE = 6, 0.2
@@ -295,7 +295,7 @@ class NewtonSolver:
 
     def _critical_point(self, x, a, da):
         """The step λ where the energy is stationary along dx, g(λ) = R(x + λ dx)·dx = 0,
-        to |g(λ)| ≤ CP_TOLERANCE |g(0)| (Crisfield 1991, vol. 1, sec. 9.3.2: a slack line
+        to ``|g(λ)| ≤ CP_TOLERANCE |g(0)|`` (Crisfield 1991, vol. 1, sec. 9.3.2: a slack line
         search): the full step if the energy still falls there, else regula falsi on the
         bracket [0, 1], a trial step where the local return fails bisected toward the
         bracket's lower end; the full step too where g(0) ≥ 0 (dx is not a descent
