@@ -16,7 +16,7 @@ author = "the soilbin developers"
 copyright = "the soilbin developers"
 
 extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax",
-              "scene_keys", "offline_mathjax"]
+              "scene_keys", "api_modules", "offline_mathjax"]
 source_suffix = {".md": "markdown"}
 exclude_patterns = ["_build", "figures/README.md"]
 
@@ -31,7 +31,6 @@ mathjax2_config = {"tex2jax": {"inlineMath": [["\\(", "\\)"]],
                                "displayMath": [["\\[", "\\]"]]}}
 
 autodoc_member_order = "bysource"
-autodoc_default_options = {"members": True, "show-inheritance": True}
 napoleon_google_docstring = False
 
 html_theme = "furo"

@@ -59,15 +59,30 @@ def markdown(tables, level):
     return "\n".join(lines)
 
 
+def write_reference(app):
+    """The sections of every marker, made before any page is read: autodoc, reading the
+    API page, adds annotations from the source to classes, as text that get_type_hints
+    cannot evaluate."""
+    app.env.scene_keys = {marker: markdown(tables(), level)
+                          for marker, (tables, level) in MARKERS.items()}
+
+
 def insert_reference(app, docname, source):
     if docname != PAGE:
         return
-    for marker, (tables, level) in MARKERS.items():
+    for marker, text in app.env.scene_keys.items():
         if marker not in source[0]:
             raise ExtensionError(f"{PAGE}.md: no {marker} line for the key reference")
-        source[0] = source[0].replace(marker, markdown(tables(), level))
+        source[0] = source[0].replace(marker, text)
+
+
+def read_again(app, env, added, changed, removed):
+    """The page is made from the code: read it at every build."""
+    return [PAGE]
 
 
 def setup(app):
+    app.connect("builder-inited", write_reference)
     app.connect("source-read", insert_reference)
+    app.connect("env-get-outdated", read_again)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

@@ -220,7 +220,7 @@ def newton(evaluate, admissible, x0, tol=NEWTON_TOL):
     ``evaluate(x, idx)`` gives the scaled residuals (k, m) and Jacobians
     (k, k, m) of the systems ``idx`` at ``x`` (k, m); ``admissible(x, idx)``
     (m,) says where an iterate may go. Each step is halved until the merit
-    |r|^2 / 2 decreases (Armijo) at an admissible point. A converged point
+    ``|r|^2 / 2`` decreases (Armijo) at an admissible point. A converged point
     gets one more full step (to rounding accuracy) where it does not increase
     the residual. Returns (x, Jacobian at x, converged).
     """
