@@ -15,10 +15,10 @@ project = "soilbin"
 author = "the soilbin developers"
 copyright = "the soilbin developers"
 
-extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax",
+extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.mathjax",
               "scene_keys", "api_modules", "offline_mathjax"]
 source_suffix = {".md": "markdown"}
-exclude_patterns = ["_build", "figures/README.md"]
+exclude_patterns = ["_build", "figures"]   # figures: images only, no pages
 
 # MyST: $...$ and $$...$$ math, \begin{align} blocks, ::: fences, definition lists;
 # headings down to ### get anchors, so [x](theory.md#the-interface) links work.
@@ -30,8 +30,8 @@ myst_update_mathjax = False
 mathjax2_config = {"tex2jax": {"inlineMath": [["\\(", "\\)"]],
                                "displayMath": [["\\[", "\\]"]]}}
 
+# The docstrings are prose in reStructuredText (no numpy or Google sections: no napoleon).
 autodoc_member_order = "bysource"
-napoleon_google_docstring = False
 
 html_theme = "furo"
 html_title = "soilbin"
