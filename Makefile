@@ -24,8 +24,8 @@ test-slow: setup
 docs: setup system-docs
 	$(PY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
 
-# run time against error; results in runs/benchmark/ (its tables into docs/performance.md:
-# python scripts/benchmark.py --no-run)
+# run time against error: results in runs/benchmark/, tables into docs/performance.md
+# (bench-quick writes no page)
 bench: setup
 	$(PY) scripts/benchmark.py
 

@@ -10,8 +10,9 @@ load's collapse pressure against (2 + pi) c, the block's collapse stress
 against 2c cos(phi) / (1 - sin(phi)), the column's settlement against pL/M;
 the tine reports its draft at the final travel (no closed form).
 
-The results go to ``runs/benchmark/results.json`` and ``results.md``;
-``--readme PATH`` also replaces the text between the benchmark markers in PATH.
+The results go to ``runs/benchmark/results.json`` and ``results.md``, and
+between the benchmark markers of docs/performance.md (--page PATH; a run of
+--quick or --only without --update writes no page unless --page names one).
 """
 import argparse
 import json
@@ -23,11 +24,12 @@ import time
 from datetime import date
 from pathlib import Path
 
+from doc_tables import DOCS, ROOT, add_page_argument, write_between_markers
 from soilbin.closed_form.verification import (column_settlement, prandtl_limit_pressure,
                                               unconfined_strength)
 
-ROOT = Path(__file__).resolve().parent.parent
-MARKERS = ("<!-- benchmark:start -->\n", "<!-- benchmark:end -->")
+PAGE = DOCS / "performance.md"   # the page of a run of every case
+
 FOOTING, COLUMN, TINE = "strip-footing-von-mises", "column-elastic", "tine-2in-90deg"
 STRIP_LOAD, BLOCK = "strip-load-von-mises", "block-drucker-prager"
 #: The tine's mesh levels of the README's "The tine's draft against the mesh": (element
@@ -178,7 +180,7 @@ def markdown(results, command):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--readme", type=Path, help="write the tables into this file")
+    add_page_argument(parser, "performance.md", default=False)
     parser.add_argument("--quick", action="store_true", help="the small cases only (< 3 min)")
     parser.add_argument("--only", nargs="+", metavar="TEXT",
                         help="only the cases whose name contains one of these")
@@ -189,6 +191,8 @@ def main():
     parser.add_argument("--case", nargs="+", metavar=("SCENE", "OVERRIDE"),
                         help="run one case in this process and print its JSON")
     args = parser.parse_args()
+    every_case = args.update or not (args.quick or args.only)
+    page = args.page or (PAGE if every_case else None)
     if args.case:
         print(json.dumps(run_case(args.case[0], args.case[1:])))
         return
@@ -213,12 +217,8 @@ def main():
     (args.out / "results.json").write_text(json.dumps(results, indent=1))
     (args.out / "results.md").write_text(text)
     print(text)
-    if args.readme:
-        readme = args.readme.read_text()
-        start, end = readme.find(MARKERS[0]), readme.find(MARKERS[1])
-        if start < 0 or end < start:
-            sys.exit(f"{args.readme}: no benchmark markers")
-        args.readme.write_text(readme[:start + len(MARKERS[0])] + text + readme[end:])
+    if page:
+        write_between_markers(page, "benchmark", text)
 
 
 if __name__ == "__main__":

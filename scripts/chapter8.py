@@ -1,8 +1,9 @@
-"""Chapter VIII: run studies/chapter8.toml and write its tables (and figure list) into the README.
+"""Chapter VIII: run studies/chapter8.toml and write its tables into docs/chapter8.md.
 
 Runs `soilbin study studies/chapter8.toml` (resumable), then reads each case's
-summary.json and curve.csv and prints, or with --readme writes between the
-chapter8 markers:
+summary.json and curve.csv, prints and writes between the chapter8 markers of
+docs/chapter8.md (--page; `python scripts/chapter8.py --no-run` only rewrites
+the tables, from the cases finished so far):
 - per case: the travel at 36, 72 and 108 lb of draft, the lift at the last
   step, the McKyes & Ali estimate twice (with the c, phi of the modified
   cap's failure surface at the wedge's stress level, as `soilbin run` writes
@@ -15,7 +16,8 @@ chapter8 markers:
   between converged steps where the adaptive steps did not land on one).
 Loads and travel in lb and in; the dissertation's figures 8.2-8.9 are the
 study's figure-8.*.png (drawn here too, of the cases finished so far),
-figures 8.10-8.12 each case's sections-*.png; --figures DIR copies figures 8.2-8.9 there.
+figures 8.10-8.12 each case's sections-*.png; figures 8.2-8.9 are copied into
+docs/figures (--figures DIR).
 """
 import shutil
 
@@ -25,7 +27,8 @@ from soilbin.app.run import draft_estimate
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
 from soilbin.records.scene import load_scene
-from study_tables import ROOT, arguments, finished, run_study, write_between_markers
+from doc_tables import ROOT, write_between_markers
+from study_tables import arguments, finished, run_study
 
 STUDY = ROOT / "studies" / "chapter8.toml"
 LOADS = (36.0, 72.0, 108.0)
@@ -116,7 +119,7 @@ def volume_change_table(results):
 
 
 def main():
-    args = arguments(__doc__, "chapter8")
+    args = arguments(__doc__, "chapter8", "chapter8.md")
     run_study(STUDY, args)
     study = load_study(STUDY)
     results = list(cases(study, args.out))
@@ -129,11 +132,9 @@ def main():
             "−3.03, −3.18; large −0.57, −1.47, −1.98, −2.88, −2.58, −4.87, −3.34):\n\n"
             + volume_change_table(results) + "\n")
     print(text)
-    if args.figures:
-        for figure in study.figures:
-            shutil.copy(args.out / f"{figure.name}.png", args.figures / f"{figure.name}.png")
-    if args.readme:
-        write_between_markers(args.readme, "chapter8", text)
+    for figure in study.figures:
+        shutil.copy(args.out / f"{figure.name}.png", args.figures / f"{figure.name}.png")
+    write_between_markers(args.page, "chapter8", text)
 
 
 if __name__ == "__main__":

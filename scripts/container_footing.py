@@ -2,16 +2,15 @@
 
 Runs `soilbin run scenes/container-footing.toml --set regions.soil=NAME` for
 each [materials.NAME] of the scene (serial subprocesses), plots the
-pressure-settlement curves on one PNG and prints (or, with --readme, writes
-between the container markers) a table of the pressure at three
-settlements, stiffest first: the dissertation reports Drucker-Prager the
+pressure-settlement curves on one PNG and prints, and writes between the
+container markers of docs/verification.md (--page), a table of the pressure at
+three settlements, stiffest first: the dissertation reports Drucker-Prager the
 stiffest and the caps closest to the test.
 """
 import argparse
 import csv
 import json
 import os
-import re
 import subprocess
 import sys
 import tomllib
@@ -20,11 +19,10 @@ from pathlib import Path
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from doc_tables import ROOT, add_page_argument, write_between_markers  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "container-footing.toml"
 SOILBIN = Path(sys.executable).with_name("soilbin")
-MARKERS = re.compile(r"(<!-- container:start -->\n).*?(<!-- container:end -->)", re.S)
 
 
 def run(material, out):
@@ -49,7 +47,7 @@ def pressure_at(rows, settlement):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "container-footing-models")
-    parser.add_argument("--readme", type=Path, help="write the table into this file")
+    add_page_argument(parser, "verification.md")
     args = parser.parse_args()
     materials = list(tomllib.loads(SCENE.read_text())["materials"])
     results = {m: run(m, args.out / m) for m in materials}
@@ -77,9 +75,7 @@ def main():
                      + [summary["newton_iterations"], f"{summary['wall_s']:.1f}"])
     text = "\n".join("| " + " | ".join(map(str, line)) + " |" for line in lines) + "\n"
     print(text)
-    if args.readme:
-        readme = args.readme.read_text()
-        args.readme.write_text(MARKERS.sub(lambda m: m[1] + text + m[2], readme))
+    write_between_markers(args.page, "container", text)
 
 
 if __name__ == "__main__":

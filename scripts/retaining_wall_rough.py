@@ -1,9 +1,9 @@
-"""VII.3, the rough wall: run the rough and smooth wall studies, write the README's tables.
+"""VII.3, the rough wall: the rough and smooth wall studies, their tables in docs/verification.md.
 
 Runs `soilbin study` on studies/retaining-wall-rough.toml and
 studies/retaining-wall-smooth.toml (resumable; into --out/rough and
---out/smooth), then prints, or with --readme writes between the README's
-retaining-wall-rough markers: per φ and δ, Kp on the default 1-in mesh and
+--out/smooth), then prints and writes between the retaining-wall-rough
+markers of docs/verification.md (--page): per φ and δ, Kp on the default 1-in mesh and
 on 0.5 in against Lancellotta's lower bound, with Coulomb's wedge, the wall
 friction V over P tan δ and the CPU time; δ = 0 against the smooth wall; and
 Kp with the penalty springs halved and doubled. Kp = P/(γH²/2), P the
@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 from soilbin.app.study import load_study
 from soilbin.closed_form.earth_pressure import coulomb_passive, lancellotta_passive
-from study_tables import ROOT, arguments, finished, run_study, write_between_markers
+from doc_tables import ROOT, write_between_markers
+from study_tables import arguments, finished, run_study
 
 ROUGH, SMOOTH = (ROOT / "studies" / f"retaining-wall-{kind}.toml" for kind in ("rough", "smooth"))
 MESHES = {1: "1 in", 2: "0.5 in"}   # mesh.refine -> element size
@@ -111,7 +112,7 @@ def stiffness_table(rough, k_default):
 
 
 def main():
-    args = arguments(__doc__, "retaining-wall-rough")
+    args = arguments(__doc__, "retaining-wall-rough", "verification.md")
     run_study(ROUGH, args, args.out / "rough")
     run_study(SMOOTH, args, args.out / "smooth")
     rough_study, rough = results(ROUGH, args.out / "rough")
@@ -120,8 +121,7 @@ def main():
     text = "\n\n".join([main_table(rough, k_default), smooth_table(rough, smooth, k_default),
                         stiffness_table(rough, k_default)]) + "\n"
     print(text)
-    if args.readme:
-        write_between_markers(args.readme, "retaining-wall-rough", text)
+    write_between_markers(args.page, "retaining-wall-rough", text)
 
 
 if __name__ == "__main__":

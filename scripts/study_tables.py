@@ -1,25 +1,27 @@
-"""What the README-table scripts of a study share: their command line, the study run,
-the finished cases' results, and the text between a pair of README markers."""
+"""What the scripts that write a study's tables into the documentation share: their
+command line, the study run and the finished cases' results."""
 import argparse
 import csv
 import json
 import os
-import re
 import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+from doc_tables import FIGURES, ROOT, add_page_argument
+
 SOILBIN = Path(sys.executable).with_name("soilbin")
 
 
-def arguments(doc, name):
-    """--out (default runs/NAME), --jobs, --readme, --figures, --no-run."""
+def arguments(doc, name, page):
+    """--out (default runs/NAME), --jobs, --page (default docs/PAGE), --figures (default
+    docs/figures), --no-run."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / name)
     parser.add_argument("--jobs", type=int, default=1)
-    parser.add_argument("--readme", type=Path, help="write the tables into this file")
-    parser.add_argument("--figures", type=Path, help="copy the README's figures into this folder")
+    add_page_argument(parser, page)
+    parser.add_argument("--figures", type=Path, default=FIGURES,
+                        help="copy the page's figures into this folder (default docs/figures)")
     parser.add_argument("--no-run", action="store_true",
                         help="only the tables, from the cases finished so far")
     return parser.parse_args()
@@ -30,15 +32,6 @@ def run_study(study, args, out=None):
     if not args.no_run:
         subprocess.run([SOILBIN, "study", study, "--out", out or args.out, "--jobs", str(args.jobs)],
                        cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
-
-
-def write_between_markers(readme, name, text):
-    """Replace what lies between <!-- NAME:start --> and <!-- NAME:end --> in ``readme``."""
-    markers = re.compile(rf"(<!-- {name}:start -->\n).*?(<!-- {name}:end -->)", re.S)
-    content = readme.read_text()
-    if not markers.search(content):
-        sys.exit(f"{readme}: no {name} markers")
-    readme.write_text(markers.sub(lambda m: m[1] + text + m[2], content))
 
 
 def finished(study, folder):

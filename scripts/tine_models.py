@@ -1,15 +1,15 @@
-"""The 2-in tine in each soil model: run studies/tine-models.toml, write its README tables.
+"""The 2-in tine in each soil model: studies/tine-models.toml, its tables in docs/chapter8.md.
 
 Runs `soilbin study studies/tine-models.toml` (resumable), then reads each
-case's summary.json and curve.csv and prints, or with --readme writes between
-the README's tine-models and tine-dilatancy markers, per case: the load steps
+case's summary.json and curve.csv, prints and writes between the tine-models
+and tine-dilatancy markers of docs/chapter8.md (--page), per case: the load steps
 (cuts), the Newton iterations (per converged step, the first step's, and
 those of attempts that were cut), the draft at 0.1, 0.25 and 0.5 in of travel
 and the wall time: the three VII.5 soil models as the scene has them
 (Drucker–Prager: c = 0, psi = phi) in tine-models, the Drucker–Prager cases
 and the caps with less dilatancy in tine-dilatancy. Draws tine-models.png
-and the study's own tine-dilatancy.png in the study folder; --figures DIR
-copies both there.
+and the study's own tine-dilatancy.png in the study folder and copies both
+into docs/figures (--figures DIR).
 Loads in lb, travel in in.
 """
 import shutil
@@ -18,7 +18,8 @@ import numpy as np
 
 from soilbin.app.study import Figure, Outcome, draw_figures, load_study
 from soilbin.app.study_figures import curves_png
-from study_tables import ROOT, arguments, finished, run_study, write_between_markers
+from doc_tables import ROOT, write_between_markers
+from study_tables import arguments, finished, run_study
 
 STUDY = ROOT / "studies" / "tine-models.toml"
 TRAVELS = (0.1, 0.25, 0.5)
@@ -93,7 +94,7 @@ def dilatancy_table(results):
 
 
 def main():
-    args = arguments(__doc__, "tine-models")
+    args = arguments(__doc__, "tine-models", "chapter8.md")
     run_study(STUDY, args)
     study = load_study(STUDY)
     results = list(outcomes(study, args.out))
@@ -104,10 +105,8 @@ def main():
     tables = {"tine-models": models_table(results), "tine-dilatancy": dilatancy_table(results)}
     for name, text in tables.items():
         print(text + "\n")
-        if args.figures:
-            shutil.copy(args.out / f"{name}.png", args.figures / f"{name}.png")
-        if args.readme:
-            write_between_markers(args.readme, name, text + "\n")
+        shutil.copy(args.out / f"{name}.png", args.figures / f"{name}.png")
+        write_between_markers(args.page, name, text + "\n")
 
 
 if __name__ == "__main__":
