@@ -23,9 +23,9 @@ import shutil
 
 import numpy as np
 
-from soilbin.app.run import draft_estimate
+from soilbin.app.run import draft_estimate, material_draft_estimate
 from soilbin.app.study import Outcome, draw_figures, load_study
-from soilbin.closed_form import ARTIFICIAL_SOIL, NoWedge, narrow_tine_draft
+from soilbin.closed_form import NoWedge
 from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
 from study_tables import arguments, finished, run_study
@@ -46,18 +46,16 @@ def cases(study, folder):
 
 
 def estimates(scene):
-    """(McKyes & Ali draft with the FE soil's c, phi, the same with the laboratory phi, c)."""
+    """McKyes & Ali drafts: with the FE soil's c, phi (the cap's failure surface at the
+    wedge), and with the scene's [tool.estimate] (the laboratory phi, c of section VII.5)."""
+    return _draft(material_draft_estimate, scene), _draft(draft_estimate, scene)
+
+
+def _draft(estimate, scene):
     try:
-        fe_soil = f"{draft_estimate(scene).draft:.3g}"
+        return f"{estimate(scene).draft:.3g}"
     except NoWedge:
-        fe_soil = "no wedge"
-    lab = dict(ARTIFICIAL_SOIL)
-    if scene.tool.bonded:
-        lab.update(delta=lab["phi"], c_a=lab["c"])
-    mesh = scene.mesh
-    laboratory = narrow_tine_draft(mesh.tool_width, mesh.tool_depth, mesh.rake_angle,
-                                   crescents=2 if mesh.tool_share < 1.0 else 1, **lab)
-    return fe_soil, f"{laboratory.draft:.3g}"
+        return "no wedge"
 
 
 def travel_at(rows, load):

@@ -132,43 +132,72 @@ def test_closed_form_imports_no_finite_element_stack():
 
 
 def test_each_tool_scene_gets_the_estimate_of_the_whole_tool():
-    """run.draft_estimate: the scene's geometry, soil (phi, c), gravity and interface (delta,
-    c_a); against the glass wall one crescent; embedded (a half model whose forces the
-    tool reports for the whole tool) both."""
-    from soilbin.app.run import draft_estimate
+    """run.material_draft_estimate: the scene's geometry, soil (phi, c), gravity and interface
+    (delta, c_a); against the glass wall one crescent; embedded (a half model whose forces
+    the tool reports for the whole tool) both."""
+    from soilbin.app.run import material_draft_estimate
     from soilbin.records.scene import load_scene
 
     scene = ROOT / "scenes" / "tine-2in-90deg.toml"
     dp = ["regions.soil=drucker_prager", "materials.drucker_prager.c=0.05"]
-    wall = draft_estimate(load_scene(scene, dp))
+    wall = material_draft_estimate(load_scene(scene, dp))
     assert wall == narrow_tine_draft(2.0, 6.0, 90.0, phi=33.0, delta=22.0, gamma=0.072, c=0.05,
-                                     crescents=1)
-    embedded = draft_estimate(load_scene(scene, dp + ["mesh.configuration=embedded",
-                                                      "mesh.rake_angle=45"]))
-    whole = narrow_tine_draft(2.0, 6.0, 45.0, phi=33.0, delta=22.0, gamma=0.072, c=0.05)
+                                     crescents=1, strength="material drucker_prager")
+    embedded = material_draft_estimate(load_scene(scene, dp + ["mesh.configuration=embedded",
+                                                               "mesh.rake_angle=45"]))
+    whole = narrow_tine_draft(2.0, 6.0, 45.0, phi=33.0, delta=22.0, gamma=0.072, c=0.05,
+                              strength="material drucker_prager")
     assert embedded == whole     # the FE reports the whole tool across the symmetry plane
-    bonded = draft_estimate(load_scene(scene, dp + ["tool.bonded=true"]))
+    bonded = material_draft_estimate(load_scene(scene, dp + ["tool.bonded=true"]))
     assert bonded == narrow_tine_draft(2.0, 6.0, 90.0, phi=33.0, delta=33.0, gamma=0.072, c=0.05,
-                                       c_a=0.05, crescents=1)
-    cap = draft_estimate(load_scene(scene))      # the modified cap: its failure surface's c, phi
+                                       c_a=0.05, crescents=1, strength="material drucker_prager")
+    cap = material_draft_estimate(load_scene(scene))   # the modified cap: its failure surface's
     assert cap == narrow_tine_draft(2.0, 6.0, 90.0, phi=cap.phi, delta=22.0, gamma=0.072, c=cap.c,
                                     crescents=1, strength=cap.strength)
-    assert 45.0 < cap.phi < 55.0 and cap.strength.startswith("failure surface at I1")
+    assert 45.0 < cap.phi < 55.0 and cap.strength == "failure surface linearised at I1 = 2.86 psi"
     with pytest.raises(NoWedge, match="phi = 50.6 from the failure surface"):
-        draft_estimate(load_scene(scene, ["tool.bonded=true"]))    # 90 + 2 phi > 180 degrees
-    assert draft_estimate(load_scene(ROOT / "scenes" / "column-elastic.toml")) is None
+        material_draft_estimate(load_scene(scene, ["tool.bonded=true"]))   # 90 + 2 phi > 180
+    assert material_draft_estimate(load_scene(ROOT / "scenes" / "column-elastic.toml")) is None
 
 
-def test_draft_figure_draws_the_estimate(tmp_path):
-    from types import SimpleNamespace
-    from soilbin.app import figures
+def test_the_tine_scene_estimates_with_the_laboratory_strength():
+    """[tool.estimate] of the tine scene: phi = 33 deg, c = 0 of section VII.5 (75 lb against
+    the wall, 129 lb embedded), then the cap surface's (832, 1540 lb) beside it; a bonded tool
+    is fully rough with the laboratory phi, and the cap surface's wedge cannot form then."""
+    from soilbin.app.run import draft_estimate, draft_estimates, material_draft_estimate
     from soilbin.records.scene import load_scene
 
-    scene = load_scene(ROOT / "scenes" / "tine-2in-90deg.toml")
-    records = [SimpleNamespace(displacement=0.05 * k, force=40.0 * k) for k in (1, 2)]
-    estimate = narrow_tine_draft(2.0, 6.0, 90.0, 33.0, 22.0, 0.072, crescents=1)
-    figures.curve_png(records, scene, tmp_path / "curve.png", estimate)
-    assert (tmp_path / "curve.png").stat().st_size > 0
+    scene = ROOT / "scenes" / "tine-2in-90deg.toml"
+    lab = {"phi": 33.0, "gamma": 0.072, "strength": "laboratory, section VII.5"}
+    wall, cap = draft_estimates(load_scene(scene))
+    assert wall == narrow_tine_draft(2.0, 6.0, 90.0, delta=22.0, crescents=1, **lab)
+    assert cap == material_draft_estimate(load_scene(scene))
+    embedded = [e.draft for e in draft_estimates(load_scene(scene, ["mesh.configuration=embedded"]))]
+    assert [round(wall.draft), round(cap.draft)] == [75, 832]
+    assert [round(d, -1) for d in embedded] == [130, 1540]
+    bonded = load_scene(scene, ["tool.bonded=true"])
+    assert draft_estimates(bonded) == [draft_estimate(bonded)]
+    assert draft_estimate(bonded) == narrow_tine_draft(2.0, 6.0, 90.0, delta=33.0, crescents=1, **lab)
+
+
+@pytest.mark.parametrize("key, value", [("phi", "90"), ("phi", "-1"), ("c", "-0.1"), ("c", "inf"),
+                                        ("phi", "'33'")])
+def test_estimate_strength_out_of_range_is_refused(key, value):
+    from soilbin.errors import InputError
+    from soilbin.records.scene import load_scene
+    with pytest.raises(InputError, match=f"tool.estimate.{key}"):
+        load_scene(ROOT / "scenes" / "tine-2in-90deg.toml", [f"tool.estimate.{key}={value}"])
+
+
+def test_keys_list_the_estimate_strength():
+    from soilbin.app.keys import scene_keys
+    from soilbin.records.scene import load_scene
+    rows = {key: (value, accepted, doc) for key, value, accepted, doc
+            in scene_keys(load_scene(ROOT / "scenes" / "tine-2in-90deg.toml"))}
+    assert rows["tool.estimate.phi"][:2] == (33.0, "[0, 90)")
+    assert rows["tool.estimate.c"][:2] == (0.0, "[0, inf)")
+    assert rows["tool.estimate.source"][0] == "laboratory, section VII.5"
+    assert all(rows[f"tool.estimate.{key}"][2] for key in ("phi", "c", "source"))
 
 
 @pytest.mark.parametrize("phi, c", [(20.0, 0.0), (33.0, 0.05), (45.0, 1.0)])

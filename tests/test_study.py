@@ -63,6 +63,7 @@ def study_file(tmp_path, text, name="study.toml"):
     (COLUMN + FIGURES + "select = {mesh.nz = 2}\n", "figures[1].select.mesh.nz: no case sets"),
     (COLUMN + '[table]\ncolumns = ["E", "top_settlement"]\n', "table.columns[0] = 'E'"),
     (COLUMN + "[set\n", "TOML syntax error"),
+    (COLUMN + "[[case]]\nlabel = 3\n", "case[0].label: expected a string, got 3"),
 ])
 def test_bad_study_is_one_line_naming_file_and_key(capsys, tmp_path, text, expected):
     path = study_file(tmp_path, text)
@@ -97,6 +98,81 @@ def test_cases_are_every_listed_case_with_every_combination(tmp_path):
     assert last.scene.loading.steps == 2 and last.scene.materials["soil"].E == 18000.0
     assert study.columns == ("loading.magnitude", "materials.soil.E", "loading.steps", "status",
                              "top_settlement", "pressure", "n_dofs", "newton_iterations", "wall_s")
+
+
+TINE = f"""\
+title = "2-in tine, bonded or not, two widths"
+scene = "{ROOT / 'scenes' / 'tine-2in-90deg.toml'}"
+[product]
+mesh.tool_width = [1, 2]
+[[case]]
+label = "bonded"
+tool.bonded = true
+[[case]]
+tool.bonded = false
+[[figures]]
+name = "curves"
+[[figures]]
+name = "sweep"
+kind = "sweep"
+x = "mesh.tool_width"
+y = "draft_force_at"
+lines = "tool.bonded"
+"""
+
+
+def _tine_outcomes(tmp_path):
+    """The TINE study with made-up curves and summaries in its case folders."""
+    from soilbin.app.study import Outcome
+    study = load_study(study_file(tmp_path, TINE))
+    outcomes = []
+    for i, case in enumerate(study.cases):
+        (tmp_path / case.name).mkdir()
+        (tmp_path / case.name / "curve.csv").write_text(
+            f"step,displacement,force\n1,0.05,{10 + i}\n2,0.1,{20 + i}\n")
+        outcomes.append(Outcome(case, "complete", {"draft_force_at": 20.0 + i}, ran=False))
+    return study, outcomes
+
+
+def test_study_figures_read_as_quantities_and_cases_in_words(tmp_path):
+    """Axes with units; a labelled case's legend is its label and the values it does not name
+    (its [product] values), an unlabelled one's its values in words."""
+    from soilbin.app.study_figures import curves_figure, sweep_figure
+    study, outcomes = _tine_outcomes(tmp_path)
+    assert [case.label for case in study.cases] == ["bonded", "bonded", "", ""]
+    curves, sweep = study.figures
+    ax = curves_figure(curves, outcomes, study, tmp_path).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("tool travel [in]", "draft [lb]")
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == [
+        "bonded, tool width 1 in", "bonded, tool width 2 in",
+        "bonded = false, tool width 1 in", "bonded = false, tool width 2 in"]
+    assert ax.get_lines()[0].get_xydata().tolist() == [[0, 0], [0.05, 10], [0.1, 20]]
+    ax = sweep_figure(sweep, outcomes, study).axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("tool width [in]", "draft [lb]")
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["bonded = true",
+                                                                   "bonded = false"]
+
+
+def test_the_table_names_labelled_cases(tmp_path):
+    from soilbin.app.study import write_table
+    study, outcomes = _tine_outcomes(tmp_path)
+    write_table(study, outcomes, tmp_path)
+    lines = (tmp_path / "table.md").read_text().splitlines()
+    assert lines[4].startswith("| case | bonded | tool_width | status |")
+    assert [line.split(" | ")[:3] for line in lines[6:]] == [
+        ["| bonded", "true", "1"], ["| bonded", "true", "2"], ["| ", "false", "1"],
+        ["| ", "false", "2"]]
+    assert (tmp_path / "table.csv").read_text().startswith("case,bonded,tool_width,status")
+
+
+def test_the_chapter_viii_cases_are_labelled():
+    study = load_study(ROOT / "studies" / "chapter8.toml")
+    assert all(case.label for case in study.cases)
+    figure_83 = [case.label for case in study.cases if case.values["mesh.configuration"]
+                 == "embedded" and case.values["mesh.tool_width"] == 2
+                 and case.values["mesh.rake_angle"] == 90]
+    assert figure_83 == ["bonded, small deformation", "interface, small deformation",
+                         "interface, large deformation"]
 
 
 def test_an_earlier_run_stands_only_for_the_same_overrides_and_scene(tmp_path):

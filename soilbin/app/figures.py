@@ -2,27 +2,61 @@
 import numpy as np
 from mpi4py import MPI
 
-from ..plotting import pyplot
+from ..plotting import column_label, pyplot, wrapped
+from ..records.scene import TOOL
+
+#: An estimate above this many times the curve's largest force is named in the legend only.
+ESTIMATE_REACH = 1.3
 
 
-def curve_png(records, scene, path, estimate=None):
-    """Force along the loading direction against displacement, one marker per converged step;
-    with a closed-form draft ``estimate`` (DraftEstimate), a horizontal reference line."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(5.5, 4))
-    ax.plot([0.0] + [r.displacement for r in records], [0.0] + [r.force for r in records], "o-", ms=3)
-    if estimate is not None:
-        ax.axhline(estimate.draft, color="tab:red", ls="--", lw=1,
-                   label=f"{estimate.model} (phi = {estimate.phi:.3g} deg, c = {estimate.c:.3g}): "
-                         f"{estimate.draft:.3g}")
-        ax.legend(fontsize=8)
-    ax.set_xlabel(f"displacement along {scene.loading.direction.value} [length]")
-    ax.set_ylabel(f"force along {scene.loading.direction.value} [force]")
-    ax.set_title(f"{scene.name}\nunits: {scene.units}", fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
+def curve_png(records, scene, path, estimates=()):
+    """Write :func:`curve_figure` to ``path``."""
+    fig = curve_figure(records, scene, estimates)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
+    pyplot().close(fig)
+
+
+def curve_figure(records, scene, estimates=()):
+    """The curve of the converged steps, one marker each: a tool's draft against its travel,
+    a loaded boundary's pressure against its displacement (settlement). The closed-form
+    draft ``estimates`` (DraftEstimate; the one that applies first) are dashed lines where
+    they lie within ESTIMATE_REACH times the largest force, else numbers in the legend."""
+    column = "force" if scene.loading.boundary == TOOL else "pressure"
+    xs = [0.0] + [r.displacement for r in records]
+    ys = [0.0] + [r.force if column == "force" else r.columns[column] for r in records]
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    ax.plot(xs, ys, "o-", ms=3, label="finite elements")
+    reach = ESTIMATE_REACH * max(max(ys), 0.0)
+    for estimate, style in zip(estimates, ({"color": "tab:red", "ls": "--"},
+                                           {"color": "tab:gray", "ls": ":"})):
+        text = _estimate_text(estimate, scene)
+        if estimate.draft <= reach:
+            ax.axhline(estimate.draft, lw=1.2, label=text, **style)
+        else:   # an empty line: its number in the legend, off the axes
+            ax.plot([], [], lw=1.2, label=text.replace("\n", " (off scale)\n", 1), **style)
+    ax.set_xlim(left=min(xs))
+    ax.set_ylim(bottom=min(ys))
+    ax.set_xlabel(column_label("displacement", scene))
+    ax.set_ylabel(column_label(column, scene))
+    ax.set_title(wrapped(scene.title), fontsize=9)
+    ax.grid(alpha=0.3)
+    if estimates:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _estimate_text(estimate, scene):
+    """The estimate's model and draft, then where its c, phi come from, on two lines."""
+    units = scene.unit_system
+    return (f"{estimate.model}: {_number(estimate.draft)} {units.force}\n{estimate.strength}: "
+            f"φ = {estimate.phi:.3g}°, c = {estimate.c:.2g} {units.stress}")
+
+
+def _number(value):
+    """Three significant digits, and every digit before the point: 0.512, 75.3, 1540."""
+    return f"{value:.3g}" if abs(value) < 1e3 else f"{value:.0f}"
 
 
 def tool_section_png(problem, path, depth_fraction=0.5):
@@ -41,6 +75,7 @@ def tool_section_png(problem, path, depth_fraction=0.5):
     if comm.rank != 0:
         return
     xs, us, ps, gaps = (np.concatenate(parts) for parts in zip(*data))
+    length = problem.scene.unit_system.length
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     scale = np.abs(us[:, :2]).max()
@@ -48,19 +83,19 @@ def tool_section_png(problem, path, depth_fraction=0.5):
                        angles="xy", scale_units="xy", scale=scale / 0.8 if scale > 0 else 1.0,
                        width=0.003)
     if scale > 0:
-        ax.quiverkey(arrows, 0.85, 1.04, scale, f"{scale:.3g} [length]", labelpos="E",
+        ax.quiverkey(arrows, 0.85, 1.04, scale, f"{scale:.3g} {length}", labelpos="E",
                      fontproperties={"size": 8})
     sc = ax.scatter(ps[:, 0], ps[:, 1], c=gaps, cmap="magma_r", s=18, edgecolors="k", linewidths=0.3)
-    fig.colorbar(sc, ax=ax, label="gap soil-tool [length]")
+    fig.colorbar(sc, ax=ax, label=f"gap between soil and tool [{length}]")
     lo, hi = ps.min(axis=0), ps.max(axis=0)
     reach = 4.0 * max(hi[0] - lo[0], hi[1] - lo[1])
     ax.set_xlim(lo[0] - reach, hi[0] + 1.5 * reach)
     ax.set_ylim(max(lo[1] - reach, xs[:, 1].min()), hi[1] + reach)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (travel) [length]")
-    ax.set_ylabel("y [length]")
-    ax.set_title(f"section z = {z_section:.3g}: soil displacement (arrows) and gap at the tool\n"
-                 f"units: {problem.scene.units}", fontsize=8, loc="left")
+    ax.set_xlabel(f"x (travel) [{length}]")
+    ax.set_ylabel(f"y [{length}]")
+    ax.set_title(f"section z = {z_section:.3g} {length}: soil displacement (arrows) and gap at "
+                 "the tool", fontsize=9, loc="left")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

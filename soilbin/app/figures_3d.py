@@ -1,7 +1,7 @@
 """A 3D picture of a tool run: the deformed soil coloured by the equivalent plastic strain,
 with the tool drawn, made off screen with pyvista (EGL or OSMesa; no X server).
 
-VTK runs in its own process (``python -m soilbin.app.figures_3d DATA.npz OUT.png UNITS``):
+VTK runs in its own process (``python -m soilbin.app.figures_3d DATA.npz OUT.png LENGTH``):
 in the process that has loaded DOLFINx, VTK's C++ runtime clashes with it (std::regex
 aborts), and a crash of the renderer must not end a run. A picture that cannot be drawn
 is a warning, not a failed run.
@@ -17,10 +17,11 @@ import numpy as np
 DRAWN_DISPLACEMENT = 0.03
 
 
-def soil_3d_png(soil, tool, units, path):
+def soil_3d_png(soil, tool, length, path):
     """``soil``: (points, hexahedra, point data, cell data) of the last frame (displacement on
     the nodes, plastic_strain on the cells); ``tool``: (points, quadrilaterals, its
-    displacement (3,)); drawn on the initial mesh warped by a stated factor."""
+    displacement (3,)); drawn on the initial mesh warped by a stated factor; ``length``: the
+    coordinates' unit."""
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")   # skip X
     import pyvista as pv
     points, cells, point_data, cell_data = soil
@@ -39,16 +40,16 @@ def soil_3d_png(soil, tool, units, path):
     tool_points, quads, tool_u = tool
     plotter.add_mesh(pv.UnstructuredGrid({pv.CellType.QUAD: quads}, tool_points + scale * tool_u),
                      color="firebrick", show_edges=True, label="tool")
-    plotter.show_bounds(xtitle="x (travel)", ytitle="y", ztitle="z", font_size=9,
-                        location="outer")
-    plotter.add_text(f"deformed soil, displacements drawn x{scale:.3g}; tool in red\n"
-                     f"units: {units}", font_size=9)
+    plotter.show_bounds(xtitle=f"x (travel) [{length}]", ytitle=f"y [{length}]",
+                        ztitle=f"z [{length}]", font_size=9, location="outer")
+    plotter.add_text(f"deformed soil, displacements drawn x{scale:.3g}; tool in red",
+                     font_size=9)
     plotter.view_vector((0.5, -1.0, 0.6))
     plotter.screenshot(str(path))
     plotter.close()
 
 
-def draw_in_subprocess(soil, tool, units, path):
+def draw_in_subprocess(soil, tool, length, path):
     """Draw :func:`soil_3d_png` in a child process; returns '' or why it was not drawn."""
     path = Path(path)
     data = path.with_suffix(".npz")
@@ -57,7 +58,7 @@ def draw_in_subprocess(soil, tool, units, path):
              plastic_strain=cell_data["plastic_strain"], tool_points=tool_points, quads=quads,
              tool_u=tool_u)
     try:
-        done = subprocess.run([sys.executable, "-m", __name__, str(data), str(path), units],
+        done = subprocess.run([sys.executable, "-m", __name__, str(data), str(path), length],
                               capture_output=True, text=True, timeout=300)
     except (OSError, subprocess.TimeoutExpired) as err:
         return str(err)
@@ -67,11 +68,11 @@ def draw_in_subprocess(soil, tool, units, path):
     return "" if done.returncode == 0 and path.is_file() else lines[-1]
 
 
-def _main(data, path, units):
+def _main(data, path, length):
     d = np.load(data)
     soil_3d_png((d["points"], d["cells"], {"displacement": d["displacement"]},
                  {"plastic_strain": d["plastic_strain"]}),
-                (d["tool_points"], d["quads"], d["tool_u"]), units, path)
+                (d["tool_points"], d["quads"], d["tool_u"]), length, path)
 
 
 if __name__ == "__main__":

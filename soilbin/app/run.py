@@ -39,30 +39,66 @@ def headline_results(scene, records):
 
 
 def draft_estimate(scene):
-    """McKyes & Ali draft of the whole tool (a soil_bin scene with gravity), or None: one
-    side crescent against the bin's glass wall, two when embedded. The soil's c, phi are
-    its own or, for a cap model, its failure surface's at the passive wedge's stress level
-    (closed_form.equivalent_strength). A bonded tool is fully rough: delta = phi, c_a = c."""
-    if scene.mesh_builder != "soil_bin" or scene.tool is None or scene.geostatic is None:
+    """The McKyes & Ali draft that applies to the whole tool (a soil_bin scene with gravity),
+    or None: with the soil's c, phi of the scene's [tool.estimate] if it gives them, else
+    the material's (:func:`material_draft_estimate`)."""
+    if not _estimated(scene) or scene.tool.estimate is None:
+        return material_draft_estimate(scene)
+    chosen = scene.tool.estimate
+    return _mckyes_ali(scene, (chosen.phi, chosen.c, chosen.source))
+
+
+def material_draft_estimate(scene):
+    """The McKyes & Ali draft with the soil material's own c, phi or, for a cap model, its
+    failure surface's at the passive wedge's stress level (closed_form.equivalent_strength);
+    None where the soil has neither."""
+    if not _estimated(scene):
         return None
-    soil, mesh = scene.materials[scene.regions["soil"]], scene.mesh
-    gamma = scene.geostatic.unit_weight
+    soil = scene.materials[scene.regions["soil"]]
     if hasattr(soil, "failure"):
-        strength = passive_wedge_strength(soil.failure, gamma, mesh.tool_depth)
-        phi, c, source = strength.phi, strength.c, f"failure surface at I1 = {strength.I1:.3g}"
-    elif hasattr(soil, "phi") and hasattr(soil, "c"):
-        phi, c, source = soil.phi, soil.c, "material"
-    else:
-        return None
-    interface = scene.tool.interface
+        strength = passive_wedge_strength(soil.failure, scene.geostatic.unit_weight,
+                                          scene.mesh.tool_depth)
+        return _mckyes_ali(scene, (strength.phi, strength.c,
+                                   f"failure surface linearised at I1 = {strength.I1:.3g} "
+                                   f"{scene.unit_system.stress}"))
+    if hasattr(soil, "phi") and hasattr(soil, "c"):
+        return _mckyes_ali(scene, (soil.phi, soil.c, f"material {scene.regions['soil']}"))
+    return None
+
+
+def _estimated(scene):
+    """Whether McKyes & Ali applies: a tool in the soil bin, under gravity."""
+    return scene.mesh_builder == "soil_bin" and scene.tool is not None and scene.geostatic is not None
+
+
+def _mckyes_ali(scene, strength):
+    """McKyes & Ali with ``strength`` (phi, c, where they come from): one side crescent
+    against the bin's glass wall, two when embedded. A bonded tool is fully rough:
+    delta = phi, c_a = c."""
+    phi, c, source = strength
+    mesh, interface = scene.mesh, scene.tool.interface
     delta, c_a = (phi, c) if scene.tool.bonded else (interface.delta, interface.c_a)
     try:
         return narrow_tine_draft(width=mesh.tool_width, depth=mesh.tool_depth, rake=mesh.rake_angle,
-                                 phi=phi, delta=delta, gamma=gamma, c=c, c_a=c_a,
-                                 crescents=2 if mesh.tool_share < 1.0 else 1, strength=source)
+                                 phi=phi, delta=delta, gamma=scene.geostatic.unit_weight, c=c,
+                                 c_a=c_a, crescents=2 if mesh.tool_share < 1.0 else 1,
+                                 strength=source)
     except NoWedge as err:
         raise NoWedge(f"no {MODEL} estimate: {err} (phi = {phi:.3g} from the {source}, "
                       f"delta = {delta:.3g})") from None
+
+
+def draft_estimates(scene):
+    """The draft that applies, then the material's if the scene chose another strength (left
+    out if its wedge cannot form); a NoWedge of the first is raised."""
+    first = draft_estimate(scene)
+    if first is None or scene.tool.estimate is None:
+        return [first] if first is not None else []
+    try:
+        other = material_draft_estimate(scene)
+    except NoWedge:
+        other = None
+    return [first] if other is None else [first, other]
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), resume=None,
@@ -148,24 +184,25 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
         **headline_results(scene, records),
     }
     try:
-        estimate = draft_estimate(scene)
+        estimates = draft_estimates(scene)
     except NoWedge as err:
-        estimate = None
+        estimates = []
         if comm.rank == 0:
             print(f"soilbin: note: {err}", file=sys.stderr)
-    if estimate is not None:
-        summary["draft_estimate"] = dataclasses.asdict(estimate)
+    for key, estimate in zip(("draft_estimate", "draft_estimate_material"), estimates):
+        summary[key] = dataclasses.asdict(estimate)
     if interrupted is not None:
         summary["signal"] = interrupted.name
         summary["exit_status"] = interrupted.exit_status
     folder.finish(summary, interrupted=interrupted is not None)
     if records and comm.rank == 0:
-        figures.curve_png(records, scene, out_dir / "curve.png", estimate)
+        figures.curve_png(records, scene, out_dir / "curve.png", estimates)
     if interrupted is None and records and sections:
         figures.tool_section_png(problem, out_dir / "tool-section.png")
     picture = folder.fields.picture() if folder.fields is not None and comm.rank == 0 else None
     if interrupted is None and records and picture is not None:
-        failure = figures_3d.draw_in_subprocess(*picture, scene.units, out_dir / "soil-3d.png")
+        failure = figures_3d.draw_in_subprocess(*picture, scene.unit_system.length,
+                                                out_dir / "soil-3d.png")
         if failure:
             print(f"soilbin: warning: soil-3d.png not drawn: {failure}", file=sys.stderr)
     return summary

@@ -10,7 +10,7 @@ to rank 0, which draws.
 import numpy as np
 from mpi4py import MPI
 
-from ..plotting import pyplot
+from ..plotting import key_words, pyplot, wrapped
 
 
 def _node_plane(coordinates, target, comm):
@@ -56,6 +56,7 @@ def _draw(panels, low, high, scene, load, path):
     size = high - low
     reach = 1.5 * max(size.max(), 1e-12)   # the tool depth or width, whichever larger
     scale = max(np.abs(p[5]).max(initial=0.0) for p in panels) or 1.0
+    units = scene.unit_system
     plt = pyplot()
     fig, axs = plt.subplots(3, 1, figsize=(7, 12))
     for ax, (title, normal, plane, axes, xs, us, tool) in zip(axs, panels):
@@ -64,23 +65,19 @@ def _draw(panels, low, high, scene, load, path):
                            angles="xy", scale_units="xy", scale=scale / (0.25 * reach),
                            cmap="viridis", width=0.0025)
         ax.scatter(tool[:, 0], tool[:, 1], s=6, c="k", label="tool")
-        ax.quiverkey(arrows, 0.85, 0.92, scale, f"{scale:.3g} {_unit(scene, 1)}",
+        ax.quiverkey(arrows, 0.85, 0.92, scale, f"{scale:.3g} {units.length}",
                      labelpos="W", coordinates="axes", fontproperties={"size": 8})
         ax.set_xlim(low[a] - reach, high[a] + reach)
         ax.set_ylim(max(low[b] - reach, xs[:, 1].min()), min(high[b] + reach, xs[:, 1].max()))
         ax.set_aspect("equal")
-        ax.set_xlabel(f"{'xyz'[a]} [{_unit(scene, 1)}]")
-        ax.set_ylabel(f"{'xyz'[b]} [{_unit(scene, 1)}]")
-        ax.set_title(f"{title}, {'xyz'[normal]} = {np.round(plane, 9) + 0.0:.3g}", fontsize=9)
-        fig.colorbar(arrows, ax=ax, label=f"in-plane displacement [{_unit(scene, 1)}]")
-    fig.suptitle(f"{scene.name}: soil displacement at draft {load:g} {_unit(scene, 0)} "
+        ax.set_xlabel(f"{'xyz'[a]} [{units.length}]")
+        ax.set_ylabel(f"{'xyz'[b]} [{units.length}]")
+        ax.set_title(f"{title}, {'xyz'[normal]} = {np.round(plane, 9) + 0.0:.3g} {units.length}",
+                     fontsize=9)
+        fig.colorbar(arrows, ax=ax, label=f"in-plane displacement [{units.length}]")
+    words, unit = key_words("loading.magnitude", scene)   # the load's: draft, or tool travel
+    fig.suptitle(f"{wrapped(scene.title)}\nsoil displacement at {words} {load:g} {unit} "
                  "(arrows on the initial geometry; black: the tool's faces)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
-
-
-def _unit(scene, which):
-    """The force (0) or length (1) unit of a scene's units string ('lb, in (...)')."""
-    parts = [p.strip() for p in scene.units.split("(")[0].split(",")]
-    return parts[which] if len(parts) > 1 else scene.units

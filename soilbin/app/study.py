@@ -79,6 +79,8 @@ class Case:
     overrides: tuple   # 'dotted.key=value' for --set: the study's [set], then the case's own
     values: dict       # dotted key -> value, every override
     scene: object      # the loaded, checked Scene
+    label: str = ""    # its [[case]] table's label: its name in legends and table.md
+    named: tuple = ()  # the keys its label stands for (its [[case]] table's)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -146,7 +148,8 @@ def _tables(raw, key):
 
 
 def _own_values(raw):
-    """Each case's own values: every [[case]] table with every combination of [product]."""
+    """(own values, label, the keys the label names) of each case: every [[case]] table with
+    every combination of [product]."""
     product = _dotted(raw.get("product", {}), "product")
     for key, values in product.items():
         if not isinstance(values, list) or not values:
@@ -154,11 +157,16 @@ def _own_values(raw):
     combinations = [dict(zip(product, c)) for c in itertools.product(*product.values())]
     cases = []
     for i, table in enumerate(_tables(raw, "case") or [{}]):
+        table = dict(table)
+        case_label = table.pop("label", "")
+        if not isinstance(case_label, str):
+            raise InputError(f"case[{i}].label: expected a string, got {case_label!r}")
         own = _dotted(table, f"case[{i}]")
         both = sorted(set(own) & set(product))
         if both:
             raise InputError(f"case[{i}].{both[0]}: the key is also swept in [product]")
-        cases += [{**own, **combination} for combination in combinations]
+        named = tuple(own) if case_label else ()
+        cases += [({**own, **combination}, case_label, named) for combination in combinations]
     return cases
 
 
@@ -191,7 +199,7 @@ def _override(key, value):
         raise InputError(f"{key}: {value!r} cannot be given to --set") from None
 
 
-def _case(scene_path, common, own, short):
+def _case(scene_path, common, own, short, case_label, named):
     from ..records.scene import load_scene
     name = folder_name(own, short)
     values = {**common, **own}
@@ -200,7 +208,7 @@ def _case(scene_path, common, own, short):
         scene = load_scene(scene_path, overrides)
     except InputError as err:
         raise InputError(f"case {name}: {err}") from None
-    return Case(name, overrides, values, scene)
+    return Case(name, overrides, values, scene, case_label, named)
 
 
 def _scene_file(raw, base):
@@ -252,9 +260,10 @@ def _parse(raw, path):
     scene_path = _scene_file(raw, path.parent)
     common = _dotted(raw.get("set", {}), "set")
     own_values = _own_values(raw)
-    swept = tuple(dict.fromkeys(key for own in own_values for key in own))
+    swept = tuple(dict.fromkeys(key for own, _, _ in own_values for key in own))
     short = _short_names(swept)
-    cases = tuple(_case(scene_path, common, own, short) for own in own_values)
+    cases = tuple(_case(scene_path, common, own, short, case_label, named)
+                  for own, case_label, named in own_values)
     names = [case.name for case in cases]
     twice = next((name for name in names if names.count(name) > 1), None)
     if twice:
@@ -447,10 +456,15 @@ def _markdown(value):
 
 
 def write_table(study, outcomes, out):
-    """table.csv (values as run) and table.md (6 significant digits) in the study folder."""
+    """table.csv (values as run) and table.md (6 significant digits) in the study folder; a
+    first column "case" with the cases' labels if the study gives any."""
     out.mkdir(parents=True, exist_ok=True)
     header = [study.short.get(column, column) for column in study.columns]
     rows = [[_cell(outcome, column) for column in study.columns] for outcome in outcomes]
+    if any(case.label for case in study.cases):
+        header.insert(0, "case")
+        for row, outcome in zip(rows, outcomes):
+            row.insert(0, outcome.case.label)
     with open(out / "table.csv", "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(header)
@@ -486,6 +500,8 @@ study file (TOML; dotted keys are the keys of 'soilbin run --set'):
   [product]                      cases: every combination of these value lists
   [[case]]                       cases: one table of overrides each (with a
                                  [product]: each case with every combination)
+    label = "..."                the case's name in the figures' legends and
+                                 table.md (default: its values in words)
   [run]
 {run}
   [table]

@@ -1,61 +1,86 @@
-"""Overlay figures of a study: the cases' curves, or a summary value against a swept key."""
+"""Overlay figures of a study: the cases' curves, or a summary value against a swept key.
+
+Axes read as quantities with units ("draft [lb]", "rake [°]", plotting), legends
+as the cases' labels or their swept values in words ("tool width 2 in").
+"""
 import csv
 
-from ..plotting import pyplot
-from .study import DONE, label
+from ..plotting import (FROM_REST, column_label, key_label, key_value, pyplot, summary_label,
+                        wrapped)
+from .study import DONE
 
 
 def _axes(figure, study, xlabel, ylabel):
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6, 4.2))
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(f"{figure.title or study.title}\nunits: {study.units}", fontsize=8)
+    ax.set_title(wrapped(figure.title or study.title), fontsize=9)
     ax.grid(alpha=0.3)
     return fig, ax
 
 
-def _save(fig, ax, path):
+def _finish(fig, ax):
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=8)
     fig.tight_layout()
+    return fig
+
+
+def _save(fig, path):
     fig.savefig(path, dpi=120)
     pyplot().close(fig)
 
 
-def _legend(case, figure, study):
-    """The case's swept values that the figure does not select on (its folder name if none)."""
-    fixed = {key for key, _ in figure.select}
-    text = ", ".join(f"{short} = {label(case.values[key])}" for key, short in study.short.items()
-                     if key in case.values and key not in fixed)
-    return text or case.name
+def legend(case, figure, study):
+    """The case's label, then the swept values that neither it names nor the figure selects
+    on, in words; its folder name if that leaves nothing."""
+    fixed = {key for key, _ in figure.select} | set(case.named)
+    words = [key_value(key, case.values[key], case.scene) for key in study.short
+             if key in case.values and key not in fixed]
+    if case.label:
+        words.insert(0, case.label)
+    return ", ".join(words) or case.name
 
 
-def curves_png(figure, outcomes, study, out):
-    """curve.csv column y against column x, one line per case that converged a step."""
-    fig, ax = _axes(figure, study, figure.x, figure.y)
+def curves_figure(figure, outcomes, study, out):
+    """curve.csv column y against column x, one line per case that converged a step (from
+    the initial state where both are zero there)."""
+    scene = study.cases[0].scene
+    start = [0.0] if figure.x in FROM_REST and figure.y in FROM_REST else []
+    fig, ax = _axes(figure, study, column_label(figure.x, scene), column_label(figure.y, scene))
     for outcome in outcomes:
         path = out / outcome.case.name / "curve.csv"
         rows = list(csv.DictReader(path.open())) if path.exists() else []
         if rows:
-            ax.plot([float(r[figure.x]) for r in rows], [float(r[figure.y]) for r in rows],
-                    "o-", ms=3, label=_legend(outcome.case, figure, study))
-    _save(fig, ax, out / f"{figure.name}.png")
+            ax.plot(start + [float(r[figure.x]) for r in rows],
+                    start + [float(r[figure.y]) for r in rows],
+                    "o-", ms=3, label=legend(outcome.case, figure, study))
+    return _finish(fig, ax)
 
 
-def sweep_png(figure, outcomes, study, out):
+def curves_png(figure, outcomes, study, out):
+    _save(curves_figure(figure, outcomes, study, out), out / f"{figure.name}.png")
+
+
+def sweep_figure(figure, outcomes, study):
     """A summary value against a swept key, one line per value of figure.lines; cases that
     did not reach their end are left out."""
-    fig, ax = _axes(figure, study, study.short[figure.x], figure.y)
+    scene = study.cases[0].scene
+    fig, ax = _axes(figure, study, key_label(figure.x, scene), summary_label(figure.y, scene))
     lines = {}
     for outcome in outcomes:
         values = outcome.case.values
         if (outcome.status in DONE and figure.x in values
                 and outcome.summary.get(figure.y) is not None):
-            key = label(values[figure.lines]) if figure.lines in values else None
+            key = values.get(figure.lines) if figure.lines else None
             lines.setdefault(key, []).append((values[figure.x], outcome.summary[figure.y]))
     for key, points in lines.items():
         xs, ys = zip(*sorted(points))
         ax.plot(xs, ys, "o-", ms=4,
-                label=None if key is None else f"{study.short[figure.lines]} = {key}")
-    _save(fig, ax, out / f"{figure.name}.png")
+                label=None if key is None else key_value(figure.lines, key, scene))
+    return _finish(fig, ax)
+
+
+def sweep_png(figure, outcomes, study, out):
+    _save(sweep_figure(figure, outcomes, study), out / f"{figure.name}.png")

@@ -20,6 +20,7 @@ from ..params import Params, from_table, param
 from . import toml_out
 from .geostatic import Geostatic, read_geostatic
 from .toml_in import assignment, read_scene_tables
+from .units import read_units
 
 
 class Control(enum.Enum):
@@ -163,6 +164,17 @@ TOOL = "tool"   # the loading boundary name that means the rigid tool
 
 
 @dataclasses.dataclass(frozen=True)
+class EstimateStrength(Params):
+    """The soil's c, phi that the McKyes & Ali draft estimate of a tool uses (summary.json,
+    curve.png) in place of its material's own, or its failure surface's at the wedge."""
+    phi: float = param(lo=0.0, hi=90.0, hi_open=True, doc="the soil's friction angle in the "
+                                                          "draft estimate [degrees]")
+    c: float = param(0.0, lo=0.0, doc="the soil's cohesion in the draft estimate (force/area)")
+    source: str = param("tool.estimate", doc="where phi and c come from, shown with the "
+                                             "estimate, e.g. 'laboratory, section VII.5'")
+
+
+@dataclasses.dataclass(frozen=True)
 class Tool(Params):
     """A rigid tool against faces of the soil mesh (a cavity's, or part of its outer boundary
     such as a wall's), displaced as a whole (loading.boundary = 'tool')."""
@@ -172,6 +184,10 @@ class Tool(Params):
                                     "interface behaviour)")
     interface: MohrCoulombInterface = param(None, doc="Mohr-Coulomb interface law (its k_n, k_s "
                                                       "also tie a bonded tool)")
+    estimate: EstimateStrength = param(None, doc="the c, phi of the McKyes & Ali draft estimate; "
+                                                 "default: the soil material's own (a cap "
+                                                 "model's failure surface linearised at the "
+                                                 "wedge)")
 
     def __post_init__(self):
         super().__post_init__()
@@ -252,6 +268,11 @@ class Scene:
     def name(self):
         return self.path.stem
 
+    @property
+    def unit_system(self):
+        """The force and length units of ``units`` (records.units: F and L if unnamed)."""
+        return read_units(self.units)
+
     def resolved(self):
         """The scene with every default filled in, as TOML text (re-runnable)."""
         def table(record):
@@ -271,6 +292,8 @@ class Scene:
             data["tool"] = {"faces": self.tool.faces, "bonded": self.tool.bonded}
             if self.tool.interface is not None:
                 data["tool"]["interface"] = table(self.tool.interface)
+            if self.tool.estimate is not None:
+                data["tool"]["estimate"] = table(self.tool.estimate)
         return toml_out.dumps(data)
 
 
