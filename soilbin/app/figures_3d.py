@@ -15,6 +15,9 @@ import numpy as np
 
 #: Largest displacement drawn, as a fraction of the mesh's extent (the scale is printed).
 DRAWN_DISPLACEMENT = 0.03
+#: Equivalent plastic strain above which a cell is drawn as yielded soil (a tenth of the
+#: largest where that is smaller).
+YIELDED = 0.01
 
 
 def soil_3d_png(soil, tool, length, path):
@@ -31,20 +34,29 @@ def soil_3d_png(soil, tool, length, path):
     scale = DRAWN_DISPLACEMENT * extent / largest if largest > 0 else 1.0
     grid = pv.UnstructuredGrid({pv.CellType.HEXAHEDRON: cells}, points)
     grid.point_data["displacement"] = u
-    grid.cell_data["plastic_strain"] = cell_data["plastic_strain"]
+    strain = cell_data["plastic_strain"]
+    grid.cell_data["plastic_strain"] = strain
+    soil = grid.warp_by_vector("displacement", factor=scale)
     plotter = pv.Plotter(off_screen=True, window_size=(1000, 650))
-    plotter.add_mesh(grid.warp_by_vector("displacement", factor=scale), scalars="plastic_strain",
-                     cmap="viridis", show_edges=True, edge_color="gray",
-                     scalar_bar_args={"title": "plastic strain [-]", "vertical": True,
-                                      "position_x": 0.85, "position_y": 0.2, "fmt": "%.2e"})
+    plotter.add_mesh(soil.extract_surface(algorithm="dataset_surface"), color="lightgray",
+                     opacity=0.2)
+    drawn = min(YIELDED, strain.max() / 10)
+    yielded = soil.threshold(drawn, scalars="plastic_strain") if drawn > 0 else None
+    if yielded is not None and yielded.n_cells:
+        plotter.add_mesh(yielded, scalars="plastic_strain", cmap="viridis", log_scale=True,
+                         clim=(drawn, strain.max()), show_edges=True, edge_color="dimgray",
+                         scalar_bar_args={"title": "plastic strain", "vertical": True,
+                                          "position_x": 0.88, "position_y": 0.2, "fmt": "%.2g",
+                                          "title_font_size": 16, "label_font_size": 14})
     tool_points, quads, tool_u = tool
     plotter.add_mesh(pv.UnstructuredGrid({pv.CellType.QUAD: quads}, tool_points + scale * tool_u),
                      color="firebrick", show_edges=True, label="tool")
     plotter.show_bounds(xtitle=f"x (travel) [{length}]", ytitle=f"y [{length}]",
                         ztitle=f"z [{length}]", font_size=9, location="outer")
-    plotter.add_text(f"deformed soil, displacements drawn x{scale:.3g}; tool in red",
-                     font_size=9)
+    plotter.add_text(f"soil that yielded (equivalent plastic strain >= {drawn:.2g}), the rest grey; "
+                     f"displacements drawn x{scale:.3g}; tool in red", font_size=9)
     plotter.view_vector((0.5, -1.0, 0.6))
+    plotter.camera.zoom(1.3)
     plotter.screenshot(str(path))
     plotter.close()
 
