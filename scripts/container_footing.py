@@ -2,15 +2,16 @@
 
 Runs `soilbin run scenes/container-footing.toml --set regions.soil=NAME` for
 each [materials.NAME] of the scene (serial subprocesses), plots the
-pressure-settlement curves on one PNG and prints, and writes between the
-container markers of docs/verification.md (--page), a table of the pressure at
-three settlements, stiffest first: the dissertation reports Drucker-Prager the
+pressure-settlement curves on one PNG (copied into docs/figures, --figures)
+and prints, and writes between the container markers of docs/verification.md
+(--page), a table of the pressure at three settlements, stiffest first: the dissertation reports Drucker-Prager the
 stiffest and the caps closest to the test.
 """
 import argparse
 import csv
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tomllib
@@ -19,7 +20,7 @@ from pathlib import Path
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from doc_tables import ROOT, add_page_argument, write_between_markers  # noqa: E402
+from doc_tables import FIGURES, ROOT, add_page_argument, write_between_markers  # noqa: E402
 
 SCENE = ROOT / "scenes" / "container-footing.toml"
 SOILBIN = Path(sys.executable).with_name("soilbin")
@@ -48,6 +49,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "container-footing-models")
     add_page_argument(parser, "verification.md")
+    parser.add_argument("--figures", type=Path, default=FIGURES,
+                        help="copy the figure into this folder (default docs/figures)")
     args = parser.parse_args()
     materials = list(tomllib.loads(SCENE.read_text())["materials"])
     results = {m: run(m, args.out / m) for m in materials}
@@ -64,6 +67,7 @@ def main():
     fig.tight_layout()
     args.out.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.out / "container-footing.png", dpi=120)
+    shutil.copy(args.out / "container-footing.png", args.figures / "container-footing.png")
 
     settlements = (0.05, 0.2, 0.4)
     order = sorted(results, key=lambda m: -pressure_at(results[m][1], settlements[-1]))
