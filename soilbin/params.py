@@ -9,7 +9,8 @@ missing, of the wrong type or out of range.
 Numbers are finite: NaN is refused everywhere (except where NaN is the
 field's default, the mark of a value not given), and so is ±inf unless the
 field's range names it as a closed bound (``param(hi=math.inf)``: inf
-accepted; a bound left out is open).
+accepted; a bound left out is open). Stresses, moduli, loads and material constants are
+bounded by :data:`MAGNITUDE` (:func:`magnitude_param`).
 """
 import dataclasses
 import enum
@@ -51,6 +52,23 @@ def param(default=dataclasses.MISSING, *, lo=None, hi=None,
     if isinstance(default, (list, dict)):
         raise TypeError("use a tuple for a sequence default")
     return dataclasses.field(default=default, metadata=meta)
+
+
+#: Accepted range of a stress, a modulus, a stiffness, a load or a material constant, in the
+#: scene's units. No physical problem leaves it in any unit system: the stiffest solid
+#: (diamond, E = 1.2e12 Pa = 1.2e13 dyn/cm^2) is seven decades below its top, the smallest
+#: constants a scene takes (a cap's compaction constant D of 7e-6 /Pa) fourteen above its
+#: bottom. Within it the products a run forms stay inside double precision (1.8e308 to
+#: 2.2e-308): squared stresses in the return map, stress x strain x volume in the assembly,
+#: the residual norm (PETSc sums unscaled squares: an entry above 1e154 makes it inf) and a
+#: load over a modulus (a strain of at most 1e40). At a load of 1e300 the norm is inf, the
+#: Newton target max(rtol, atol) x inf is met and a step "converges" with nothing done.
+MAGNITUDE = Range(1e-20, 1e20)
+
+
+def magnitude_param(default=dataclasses.MISSING, *, doc, zero=False):
+    """A positive number within :data:`MAGNITUDE`; ``zero``: 0 also accepted ([0, 1e20])."""
+    return param(default, lo=0.0 if zero else MAGNITUDE.lo, hi=MAGNITUDE.hi, doc=doc)
 
 
 class Params:

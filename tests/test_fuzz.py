@@ -19,6 +19,7 @@ DELETE = object()
 values = st.one_of(
     st.just(DELETE), st.booleans(), st.integers(-10**12, 10**12),
     st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=8),
+    st.sampled_from([1e300, -1e300, 1e-300, 1e-9, 0.0]),
     st.sampled_from(["x", "-z", "soil", "tool", "base", "force", "jaky", "hex27-bbar", ""]),
     st.lists(st.one_of(st.integers(-3, 3), st.floats(), st.sampled_from(["x", "y", "q"])),
              max_size=4),
@@ -83,6 +84,30 @@ def test_set_strings(data):
         ["[]", "{}", "inf", "-inf", "nan", "1e400", "[1, 'a']", '{of="peak_force"}', "0", "-1"])))
     item = data.draw(st.sampled_from([f"{key}={text}", text, f"{key}.{text}=1", f"={text}"]))
     check(raw, path, ("--set",) + tuple(key.split(".")), [item])
+
+
+@pytest.mark.parametrize("scene, item, accepted", [
+    # a residual norm that overflows: the first step "converges" with nothing done
+    ("strip-load-von-mises", "loading.magnitude=1e300", "[1e-20, 1e+20]"),
+    ("strip-load-von-mises", "loading.magnitude=1e-300", "[1e-20, 1e+20]"),
+    # a modulus whose stresses overflow: every step cut, for minutes
+    ("tine-2in-90deg", "materials.modified_cap.E=1e300", "[1e-20, 1e+20]"),
+    ("tine-2in-90deg", "materials.modified_cap.E=1e-300", "[1e-20, 1e+20]"),
+    ("tine-2in-90deg", "tool.interface.k_n=1e300", "[1e-20, 1e+20]"),
+    ("retaining-wall-passive", "geostatic.unit_weight=1e300", "[0, 1e+20]"),
+    ("retaining-wall-passive", "geostatic.surface=-1e300", "[-1e+06, 1e+06]"),
+    # sizes gmsh cannot mesh (it aborted the process), and a cell count that overflowed
+    ("container-footing", "mesh.edge_size=1e-9", "at least 1.2e-05"),
+    ("tine-2in-90deg", "mesh.element_size=1e-300", "at least"),
+])
+def test_values_a_run_cannot_honour_are_refused_on_reading(scene, item, accepted):
+    path = SCENES / f"{scene}.toml"
+    with pytest.raises(InputError) as refused:
+        scene_from_table(RAW[path], path, [item])
+    message = str(refused.value)
+    key = item.split("=")[0]
+    assert message.startswith(f"{path}: {key}") and "\n" not in message
+    assert accepted in message
 
 
 @pytest.mark.parametrize("path", sorted(RAW))

@@ -222,10 +222,31 @@ def test_cell_sizes_follow_the_size_field(tm_name, refine, request):
     ("strip_footing", {"footing_width": 30.0}, "mesh.footing_width"),
     ("box", {"lz": 0.0}, "mesh.lz"),
     ("box", {"nx": 0}, "mesh.nx"),
+    # lengths gmsh cannot resolve (below 1e-6 of the largest extent), refused before it runs
+    ("strip_footing", {"edge_size": 1e-9}, "mesh.edge_size / refine"),
+    ("strip_footing", {"footing_width": 1e-9}, "mesh.footing_width / 2"),
+    ("strip_footing", {"footing_width": 20.0 - 1e-9}, "mesh.width - footing_width / 2"),
+    ("strip_footing", {"corner_size": 1e-300}, "mesh.corner_size"),
+    ("box", {"lx": 1e-300}, "mesh.lx"),
+    ("box", {"lx": 1e6, "nx": 10}, "mesh.lz / nz"),
+    ("retaining_wall", {"element_size": 1e-300}, "mesh.element_size / refine"),
+    ("retaining_wall", {"wall_height": 15.0 - 1e-9}, "mesh.depth - wall_height"),
+    ("soil_bin", {"element_size": 1e-300}, "mesh.element_size / refine"),
+    ("soil_bin", {"tool_thickness": 1e-9}, "mesh.tool_thickness"),
 ])
 def test_out_of_range_parameter_is_named(name, values, culprit):
     with pytest.raises(InputError, match=rf"^{re.escape(culprit)} = "):
         from_table(BUILDERS[name].params, values, "mesh")
+
+
+def test_a_gmsh_error_is_one_line_of_input_error():
+    """gmsh's mesher errors, thrown where the process would abort, reach the user as input
+    errors (the reader's proportion check bypassed to get a size gmsh cannot mesh)."""
+    params = from_table(StripFootingParams, {"dimension": 2}, "mesh")
+    object.__setattr__(params, "edge_size", 1e-9)
+    with pytest.raises(InputError, match=r"^mesh builder 'strip_footing': gmsh cannot mesh "
+                                         r"the geometry of \[mesh\] \(Error: [^\n]*\)"):
+        BUILDERS["strip_footing"].build(params, COMM)
 
 
 def test_builders_declare_their_groups_and_document_parameters(box, slab):

@@ -6,7 +6,7 @@ boundary conditions on the named faces.
 from dataclasses import dataclass
 
 from ..params import Params, param
-from .builder import Builder, check_cell_count, length_param
+from .builder import Builder, check_cell_count, check_proportions, length_param
 
 
 @dataclass(frozen=True)
@@ -21,6 +21,8 @@ class BoxParams(Params):
     def __post_init__(self):
         super().__post_init__()
         check_cell_count(self.cells, "nx, ny, nz")
+        check_proportions({"lx": self.lx, "ly": self.ly, "lz": self.lz, "lx / nx": self.lx / self.nx,
+                           "ly / ny": self.ly / self.ny, "lz / nz": self.lz / self.nz})
 
     @property
     def cells(self) -> int:

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 from ..errors import InputError
 from ..params import Params, param
-from .builder import Builder, check_cell_count, dimension_param, length_param, refine_param
+from .builder import (Builder, check_cell_count, check_proportions, dimension_param, length_param,
+                      refine_param)
 from .segments import Segment
 
 
@@ -37,7 +38,18 @@ class RetainingWallParams(Params):
         if self.wall_height >= self.depth:
             raise InputError(f"wall_height = {self.wall_height!r} must be less than depth = {self.depth!r} "
                              "(the soil reaches below the wall's toe)")
+        check_proportions(self.lengths)
         check_cell_count(self.cells, "element_size, growth, refine")
+
+    @property
+    def lengths(self):
+        """The extents of the mesh and the lengths in it that gmsh must resolve: key -> value."""
+        lengths = {"length": self.length, "depth": self.depth, "wall_height": self.wall_height,
+                   "depth - wall_height": self.depth - self.wall_height,
+                   "element_size / refine": self.element_size / self.refine}
+        if self.dimension == 3:
+            lengths["thickness"] = self.thickness
+        return lengths
 
     @property
     def cells(self) -> int:

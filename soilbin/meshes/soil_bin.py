@@ -31,7 +31,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..params import Params, param
-from .builder import MAX_LENGTH, Builder, check_cell_count, length_param, refine_param
+from .builder import (MAX_LENGTH, Builder, check_cell_count, check_proportions, length_param,
+                      refine_param)
 from .segments import Segment
 
 #: Default length of soil ahead of and behind the blade, in tool widths.
@@ -79,6 +80,7 @@ class SoilBinParams(Params):
         if self.span >= self.bin_width:
             raise InputError(f"tool_width = {self.tool_width!r} leaves no soil beside the tool: its span "
                              f"{self.span!r} in y must be less than bin_width = {self.bin_width!r}")
+        check_proportions(self.lengths)
         check_cell_count(self.cells, "element_size, growth, refine and the extents")
 
     @property
@@ -111,6 +113,17 @@ class SoilBinParams(Params):
     def length(self) -> float:
         """Length of the bin in x."""
         return self.tip + self.ahead
+
+    @property
+    def lengths(self):
+        """The extents of the mesh and the lengths in it that gmsh must resolve: key -> value."""
+        return {"the bin's length": self.length, "bin_width": self.bin_width,
+                "bin_depth": self.bin_depth, "tool_width": self.tool_width,
+                "tool_thickness": self.tool_thickness, "tool_depth": self.tool_depth,
+                "bin_depth - tool_depth": self.bin_depth - self.tool_depth,
+                "bin_width - the tool's span": self.bin_width - self.span,
+                "ahead": self.ahead, "behind": self.behind,
+                "element_size / refine": self.element_size / self.refine}
 
     @property
     def cells(self) -> int:

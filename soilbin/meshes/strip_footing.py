@@ -24,7 +24,8 @@ from dataclasses import dataclass
 
 from ..errors import InputError
 from ..params import Params, param
-from .builder import Builder, check_cell_count, dimension_param, length_param, refine_param
+from .builder import (Builder, check_cell_count, check_proportions, dimension_param, length_param,
+                      refine_param)
 
 
 @dataclass(frozen=True)
@@ -54,7 +55,21 @@ class StripFootingParams(Params):
                                          self.width - self.footing_width / 2.0, self.depth):
             raise InputError(f"corner_size = {self.corner_size!r}: three of them must fit in the "
                              f"footing's half-width, the soil beside it and the depth")
+        check_proportions(self.lengths)
         check_cell_count(self.cells, "edge_size, far_size, size_growth, refine")
+
+    @property
+    def lengths(self):
+        """The extents of the mesh and the lengths in it that gmsh must resolve: key -> value."""
+        lengths = {"width": self.width, "depth": self.depth,
+                   "footing_width / 2": self.footing_width / 2.0,
+                   "width - footing_width / 2": self.width - self.footing_width / 2.0,
+                   "edge_size / refine": self.edge_size / self.refine}
+        if self.corner_size > 0.0:
+            lengths["corner_size"] = self.corner_size
+        if self.dimension == 3:
+            lengths["thickness"] = self.thickness
+        return lengths
 
     @property
     def cells(self):

@@ -44,7 +44,7 @@ def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Gr
     def model():
         gmsh.model.add(name)
         made_regions, made_boundaries = geometry()
-        return _mesh_cells(_as_declared(name, "regions", regions, made_regions),
+        return _mesh_cells(name, _as_declared(name, "regions", regions, made_regions),
                            _as_declared(name, "boundaries", boundaries, made_boundaries), dimension)
     return distribute(comm, name, model, dimension)
 
@@ -108,7 +108,7 @@ def _as_declared(name: str, kind: str, declared: tuple[str, ...], made: Groups) 
     return {group: made[group] for group in declared}
 
 
-def _mesh_cells(regions: Groups, boundaries: Groups,
+def _mesh_cells(name: str, regions: Groups, boundaries: Groups,
                 dimension: int) -> tuple[dict[str, int], dict[str, int]]:
     """Add the physical groups, mesh, and check the cells (hexahedra, or quadrilaterals)."""
     unassigned = {t for _, t in gmsh.model.getEntities(dimension)} - set().union(*regions.values())
@@ -118,9 +118,26 @@ def _mesh_cells(regions: Groups, boundaries: Groups,
     numbers = itertools.count(1)
     tags = (_add_physical_groups(dimension, regions, numbers),
             _add_physical_groups(dimension - 1, boundaries, numbers))
-    gmsh.model.mesh.generate(dimension)
+    _generate(name, dimension)
     check_cells(RuntimeError, "gmsh made", dimension)
     return tags
+
+
+def _generate(name: str, dimension: int):
+    """Mesh the model; an error of gmsh's mesher (a size or a shape it cannot honour) is an
+    InputError. gmsh 4.8 throws its errors (General.AbortOnError = 2, the API's default) from
+    inside its OpenMP region, where nothing can catch them and the process aborts; with 1 it
+    logs the error and stops meshing."""
+    gmsh.option.setNumber("General.AbortOnError", 1)
+    gmsh.logger.start()
+    try:
+        gmsh.model.mesh.generate(dimension)
+        errors = [line for line in gmsh.logger.get() if line.startswith("Error")]
+    finally:
+        gmsh.logger.stop()
+    if errors:
+        raise InputError(f"mesh builder {name!r}: gmsh cannot mesh the geometry of [mesh] "
+                         f"({errors[0]}); change its lengths or sizes")
 
 
 def check_cells(error, source, dimension=3):

@@ -124,11 +124,10 @@ surface (codes of :mod:`.base`).
 import abc
 import dataclasses
 import enum
-import math
 
 import numpy as np
 
-from ..params import param
+from ..params import magnitude_param, param
 from ..tensors import IDENTITY
 from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
 from .cone import tension_cutoff_param
@@ -153,23 +152,20 @@ class CapHardening(enum.Enum):
     CAP_COMPACTION = "cap_compaction"
 
 
-def _positive(doc):
-    return param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True, doc=doc)
-
-
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class CapModel(IsotropicElasticity):
     """Base of the cap models (module doc); a subclass gives the failure function and
     its parameters (A, and B for the modified cap)."""
 
-    C: float = _positive("failure surface: C of -C exp(-beta I1), stress units")
-    beta: float = _positive("failure surface: beta of exp(-beta I1), 1 / stress units")
-    R: float = _positive("cap ellipse axis ratio, (X - L) / F(L)")
-    W: float = _positive("hardening: largest plastic compaction, eps_v^p = W (1 - exp(-D X))")
-    D: float = _positive("hardening: D of eps_v^p = W (1 - exp(-D X)), 1 / stress units")
-    X0: float = param(0.0, lo=0.0, hi=math.inf, hi_open=True,
-                      doc="initial cap position X (compression-positive I1); moved out to pass "
-                          "through the initial stress where that lies beyond it")
+    C: float = magnitude_param(doc="failure surface: C of -C exp(-beta I1), stress units")
+    beta: float = magnitude_param(doc="failure surface: beta of exp(-beta I1), 1 / stress units")
+    R: float = magnitude_param(doc="cap ellipse axis ratio, (X - L) / F(L)")
+    W: float = magnitude_param(doc="hardening: largest plastic compaction, "
+                                   "eps_v^p = W (1 - exp(-D X))")
+    D: float = magnitude_param(doc="hardening: D of eps_v^p = W (1 - exp(-D X)), 1 / stress units")
+    X0: float = magnitude_param(0.0, zero=True,
+                                doc="initial cap position X (compression-positive I1); moved out "
+                                    "to pass through the initial stress where that lies beyond it")
     tension_cutoff: float = tension_cutoff_param()
     dilatancy: float = param(
         1.0, lo=0.0, hi=1.0,
@@ -595,7 +591,8 @@ def retreating_samples(cls):
 class DiMaggioSandler(CapModel):
     """DiMaggio–Sandler cap: F(I1) = A - C exp(-beta I1) (eq. B.9; module doc)."""
 
-    A: float = _positive("failure surface: the von Mises plateau sqrt(J2) = A, stress units")
+    A: float = magnitude_param(doc="failure surface: the von Mises plateau sqrt(J2) = A, "
+                                   "stress units")
 
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)
@@ -613,11 +610,10 @@ class ModifiedCap(CapModel):
     """The dissertation's modified cap: F(I1) = A + B I1 - C exp(-beta I1)
     (eq. B.12; module doc): Drucker–Prager sqrt(J2) = A + B I1 at high pressure."""
 
-    A: float = _positive("failure surface: intercept of the high-pressure line A + B I1, "
-                         "stress units")
-    B: float = param(lo=0.0, hi=math.inf, hi_open=True,
-                     doc="failure surface: slope of the high-pressure Drucker–Prager line "
-                         "sqrt(J2) = A + B I1")
+    A: float = magnitude_param(doc="failure surface: intercept of the high-pressure line "
+                                   "A + B I1, stress units")
+    B: float = magnitude_param(zero=True, doc="failure surface: slope of the high-pressure "
+                                              "Drucker–Prager line sqrt(J2) = A + B I1")
 
     def failure(self, I1):
         e = self.C * np.exp(-self.beta * I1)

@@ -68,7 +68,7 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..params import param
+from ..params import MAGNITUDE, magnitude_param, param
 from ..tensors import IDENTITY
 from .base import APEX, CAP, ELASTIC, FAILURE, SHEAR, TIP, Sample
 from .elastic import ExponentialBulk, IsotropicElasticity, LinearBulk
@@ -88,10 +88,6 @@ class CriticalStateElasticity(enum.Enum):
     PRESSURE_DEPENDENT = "pressure_dependent"
 
 
-def _positive(doc):
-    return param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True, doc=doc)
-
-
 @dataclasses.dataclass(frozen=True)
 class CriticalStateModel(IsotropicElasticity):
     """Base of Cam-Clay and modified Cam-Clay (module doc); a subclass gives
@@ -100,21 +96,21 @@ class CriticalStateModel(IsotropicElasticity):
     phi: float = param(lo=0.0, hi=90.0, lo_open=True, hi_open=True,
                        doc="critical-state friction angle [degrees]: "
                            "M = 6 sin(phi) / (3 - sin(phi))")
-    lam: float = _positive("slope lambda of the normal compression line, e against ln p")
-    kappa: float = _positive("slope kappa of the unloading-reloading line, e against ln p "
-                             "(less than lam)")
-    e0: float = _positive("initial void ratio")
-    p_c0: float = _positive("preconsolidation pressure (compression positive) where the initial "
-                            "stress is lower; stress units")
-    ocr: float = param(1.0, lo=1.0, hi=math.inf, hi_open=True,
+    lam: float = magnitude_param(doc="slope lambda of the normal compression line, e against ln p")
+    kappa: float = magnitude_param(doc="slope kappa of the unloading-reloading line, e against "
+                                       "ln p (less than lam)")
+    e0: float = magnitude_param(doc="initial void ratio")
+    p_c0: float = magnitude_param(doc="preconsolidation pressure (compression positive) where "
+                                      "the initial stress is lower; stress units")
+    ocr: float = param(1.0, lo=1.0, hi=MAGNITUDE.hi,
                        doc="overconsolidation ratio: p_c starts at ocr times the p_c of the yield "
                            "surface through the initial stress (at least p_c0)")
     elasticity: CriticalStateElasticity = param(
         CriticalStateElasticity.LINEAR,
         doc="linear (K, G from E, nu) or pressure_dependent (K = (1+e0)(p+p_min)/kappa, "
             "G from E, nu)")
-    p_min: float = param(0.0, lo=0.0, hi=math.inf, hi_open=True,
-                         doc="pressure_dependent only: K = (1+e0)(p+p_min)/kappa; stress units")
+    p_min: float = magnitude_param(0.0, zero=True, doc="pressure_dependent only: "
+                                                       "K = (1+e0)(p+p_min)/kappa; stress units")
 
     history = {"stress": (6,), "p_c": (), "eps_p_vol": (), "eps_p_eq": (), "yield_state": ()}
 

@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..params import param
+from ..params import magnitude_param, param
 from ..tensors import IDENTITY
 from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
 from .cone import ConeModel, cone_samples, tension_cutoff_param
@@ -20,7 +20,7 @@ class DruckerPrager(ConeModel):
     to phi (psi = phi, the default: associated flow); optionally the tension
     cut-off p = I1/3 <= tension_cutoff (see .cone)."""
 
-    c: float = param(lo=0.0, hi=math.inf, hi_open=True, doc="Mohr–Coulomb cohesion")
+    c: float = magnitude_param(zero=True, doc="Mohr–Coulomb cohesion")
     phi: float = param(lo=0.0, hi=90.0, hi_open=True,
                        doc="Mohr–Coulomb friction angle [degrees]")
     matching: Matching = param(doc="fit of the cone to Mohr–Coulomb: "

@@ -2,11 +2,10 @@
 volumetric laws (compression positive) of the invariant models, a constant
 bulk modulus (:class:`LinearBulk`) or the kappa-line (:class:`ExponentialBulk`)."""
 import dataclasses
-import math
 
 import numpy as np
 
-from ..params import param
+from ..params import magnitude_param, param
 from ..tensors import IDENTITY, P_DEV, P_VOL
 from .base import ELASTIC, SHEAR, Model, Sample
 
@@ -61,7 +60,7 @@ class ExponentialBulk:
 class IsotropicElasticity(Model):
     """Base of every model whose elastic part is isotropic and linear."""
 
-    E: float = param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True, doc="Young's modulus")
+    E: float = magnitude_param(doc="Young's modulus")
     nu: float = param(lo=-1.0, hi=0.5, lo_open=True, hi_open=True, doc="Poisson's ratio")
 
     @property

@@ -21,14 +21,14 @@ import math
 
 import numpy as np
 
-from ..params import Params, param
+from ..params import Params, magnitude_param, param
 
 
 @dataclasses.dataclass(frozen=True)
 class MohrCoulombInterface(Params):
-    k_n: float = param(lo=0.0, lo_open=True, doc="normal penalty stiffness (traction per length)")
-    k_s: float = param(lo=0.0, lo_open=True, doc="shear penalty stiffness (traction per length)")
-    c_a: float = param(0.0, lo=0.0, doc="adhesion of soil to the tool (stress)")
+    k_n: float = magnitude_param(doc="normal penalty stiffness (traction per length)")
+    k_s: float = magnitude_param(doc="shear penalty stiffness (traction per length)")
+    c_a: float = magnitude_param(0.0, zero=True, doc="adhesion of soil to the tool (stress)")
     delta: float = param(0.0, lo=0.0, hi=90.0, hi_open=True,
                          doc="soil-tool friction angle [degrees]")
 
@@ -78,8 +78,8 @@ class BondedInterface(Params):
     """Soil glued to the tool by the penalty springs alone: t = k_n g n + k_s P_t jump,
     in tension as in compression, with no slip (the dissertation's analyses "without
     interface elements"). Linear; its history is an unused slip kept for a uniform state."""
-    k_n: float = param(lo=0.0, lo_open=True, doc="normal penalty stiffness (traction per length)")
-    k_s: float = param(lo=0.0, lo_open=True, doc="shear penalty stiffness (traction per length)")
+    k_n: float = magnitude_param(doc="normal penalty stiffness (traction per length)")
+    k_s: float = magnitude_param(doc="shear penalty stiffness (traction per length)")
 
     history = MohrCoulombInterface.history
     initial_state = MohrCoulombInterface.initial_state

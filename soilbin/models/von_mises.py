@@ -1,9 +1,8 @@
 """Perfectly plastic von Mises, sqrt(J2) = c (dissertation eq. B.1): the
 Drucker–Prager cone with eta = 0, so in plane strain the Tresca strength is c."""
 import dataclasses
-import math
 
-from ..params import param
+from ..params import magnitude_param
 from .cone import ConeModel, cone_samples, tension_cutoff_param
 
 
@@ -11,8 +10,7 @@ from .cone import ConeModel, cone_samples, tension_cutoff_param
 class VonMises(ConeModel):
     """f = sqrt(J2) - c, optionally with the tension cut-off p <= tension_cutoff (see .cone)."""
 
-    c: float = param(lo=0.0, hi=math.inf, lo_open=True, hi_open=True,
-                     doc="undrained shear strength")
+    c: float = magnitude_param(doc="undrained shear strength")
     tension_cutoff: float = tension_cutoff_param()
 
     @property

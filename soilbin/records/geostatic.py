@@ -14,7 +14,8 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..params import Params, from_table, param
+from ..meshes.builder import MAX_LENGTH
+from ..params import Params, from_table, magnitude_param, param
 
 #: The K0 that follows the friction angle.
 JAKY = "jaky"
@@ -24,10 +25,10 @@ JAKY = "jaky"
 class Geostatic(Params):
     """Gravity and the K0 initial stress, in equilibrium before the first step:
     σ_v = γ (z − z_s), σ_h = K0 σ_v (tension positive: compressive below the surface)."""
-    unit_weight: float = param(lo=0.0, doc="unit weight γ of the soil (force/volume)")
+    unit_weight: float = magnitude_param(zero=True, doc="unit weight γ of the soil (force/volume)")
     K0: float = param(lo=0.0, hi=10.0, doc="coefficient of earth pressure at rest, or 'jaky': 1 − sin φ "
                                            "of the soil's friction angle")
-    surface: float = param(0.0, doc="z of the ground surface")
+    surface: float = param(0.0, lo=-MAX_LENGTH, hi=MAX_LENGTH, doc="z of the ground surface")
 
     def stress(self, x):
         """Initial stress (n, 6), Mandel, at the points x (n, 3)."""

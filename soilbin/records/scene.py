@@ -16,7 +16,7 @@ from ..errors import InputError
 from ..meshes import BUILDERS
 from ..models import MODELS
 from ..models.mohr_coulomb_interface import MohrCoulombInterface
-from ..params import Params, from_table, param
+from ..params import Params, from_table, magnitude_param, param
 from . import toml_out
 from .geostatic import Geostatic, read_geostatic
 from .toml_in import assignment, read_scene_tables
@@ -102,7 +102,7 @@ class HeadlineResult(Params):
     """A headline value: a quantity read off the curve, optionally divided by a
     scale (to make it dimensionless, e.g. an earth-pressure coefficient)."""
     of: Headline = param(doc="the quantity read off the curve")
-    divide_by: float = param(1.0, lo=0.0, lo_open=True, doc="scale the value is divided by")
+    divide_by: float = magnitude_param(1.0, doc="scale the value is divided by")
 
 
 AXES = ("x", "y", "z")
@@ -125,7 +125,7 @@ class Traction(Params):
     """A dead load (e.g. a surcharge) applied in full from the first step on."""
     boundary: str = param(doc="facet group of the mesh")
     direction: Direction = param(doc="signed axis of the traction, e.g. '-z'")
-    magnitude: float = param(lo=0.0, doc="traction (force/area)")
+    magnitude: float = magnitude_param(zero=True, doc="traction (force/area)")
 
 
 #: Most load steps a scene may ask for (each is a Newton solve).
@@ -140,9 +140,9 @@ class Loading(Params):
                                  "is the load factor's (follows the load to its peak and past it)")
     boundary: str = param(doc="facet group that is loaded or displaced")
     direction: Direction = param(doc="signed axis of the load, e.g. '-z'")
-    magnitude: float = param(lo=0.0, lo_open=True,
-                             doc="traction (force/area) or displacement (length; the mean one "
-                                 "under indirect_displacement) at load factor 1")
+    magnitude: float = magnitude_param(doc="traction (force/area) or displacement (length; the "
+                                           "mean one under indirect_displacement) at load "
+                                           "factor 1")
     steps: int = param(lo=1, hi=MAX_STEPS, doc="number of equal load steps to load factor 1")
     max_cuts: int = param(8, lo=0, hi=30, doc="times a failing step may be halved in a row")
     first_cuts: int = param(0, lo=0, hi=30, doc="times the first step is halved before it is "
