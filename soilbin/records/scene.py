@@ -150,7 +150,8 @@ class Loading(Params):
                                                "steps); at most max_cuts")
     until_collapse: bool = param(False, doc="force control: the run ends normally at the soil's "
                                             "limit, the first step whose displacement per unit load "
-                                            "is 100 times the first step's, or a step that cannot "
+                                            "is 100 times the secant one at the first nominal "
+                                            "step (1/steps of the load), or a step that cannot "
                                             "be converged")
 
     def __post_init__(self):
@@ -169,7 +170,8 @@ class EstimateStrength(Params):
     curve.png) in place of its material's own, or its failure surface's at the wedge."""
     phi: float = param(lo=0.0, hi=90.0, hi_open=True, doc="the soil's friction angle in the "
                                                           "draft estimate [degrees]")
-    c: float = param(0.0, lo=0.0, doc="the soil's cohesion in the draft estimate (force/area)")
+    c: float = magnitude_param(0.0, zero=True, doc="the soil's cohesion in the draft estimate "
+                                                   "(force/area)")
     source: str = param("tool.estimate", doc="where phi and c come from, shown with the "
                                              "estimate, e.g. 'laboratory, section VII.5'")
 

@@ -56,9 +56,9 @@ class NewtonResult:
 MAX_BACKTRACKS = 10
 #: Fraction of the Newton decrease of ‖R‖²/2 a backtracking step must achieve.
 ARMIJO = 1e-4
-#: Trial steps of the critical-point line search, and its tolerance on ``|g(λ)|/|g(0)|``
-#: (the tine's first step out of K0: 26 Newton iterations with 6 trials and 0.2; with
-#: 4 trials, 33 with 0.5 and 46 with Crisfield's 0.8).
+#: Trial steps of the critical-point line search, and its tolerance on ``|g(λ)|/|g(0)|``:
+#: 6 and 0.2 take the tine's first step out of K0 in 26 Newton iterations, where 4 trials
+#: and 0.5 take 33 and Crisfield's 0.8 takes 46 (each trial costs one residual).
 CP_TRIALS, CP_TOLERANCE = 6, 0.2
 #: A residual this many times the step's first ends the step (it is cut).
 DIVERGENCE = 10.0
@@ -188,6 +188,9 @@ class NewtonSolver:
         target = max(self._opts.rtol * residuals[0], self._opts.atol * self._force_scale)
         if self.on_iterate is not None:
             self.on_iterate(len(residuals) - 1, residuals[-1], target)
+        if not math.isfinite(residuals[-1]):
+            raise NewtonFailure(f"the residual is {residuals[-1]} (a load or stiffness too large "
+                                "for double precision)")
         return residuals[-1] <= target
 
     def _newton_step(self):
