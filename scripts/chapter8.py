@@ -6,9 +6,10 @@ docs/chapter8.md (--page; `python scripts/chapter8.py --no-run` only rewrites
 the tables, from the cases finished so far):
 - per case: the travel at 36, 72 and 108 lb of draft, the lift at the last
   step, the McKyes & Ali estimate twice (with the c, phi of the modified
-  cap's failure surface at the wedge's stress level, as `soilbin run` writes
-  it, and with the soil's laboratory phi = 33 deg, c = 0 of section VII.5),
-  Newton iterations and wall time;
+  cap's failure surface at the wedge's stress level, which `soilbin run`
+  writes as draft_estimate_material, and with the scene's [tool.estimate],
+  the soil's laboratory phi = 33 deg, c = 0 of section VII.5, which it writes
+  as draft_estimate), Newton iterations and wall time;
 - the volume-change table of chapter VIII: the incremental volumetric strain
   (x 10^3, negative in compression) of the soil element in front of the
   embedded 2-in vertical tool with the interface, per 12-lb load step, small

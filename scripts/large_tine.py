@@ -3,20 +3,20 @@
     OMP_NUM_THREADS=1 python scripts/large_tine.py --set mesh.refine=4 [--set ...]
     OMP_NUM_THREADS=1 mpirun -n 2 python scripts/large_tine.py --set mesh.refine=4
 
-One load step of the default tine scene (by default 1/8 of its travel,
+One load step of the tine scene tine-2in-90deg (by default 1/8 of its travel,
 ``loading.magnitude = 0.0125``: the step out of the K0 state, the hardest of
 the run) with GMRES + GAMG (``solver.linear = "amg"``) unless overridden
 (``--set solver.linear=blr``: MUMPS's block low-rank LU). On the fine meshes
 that step does not converge; a smaller one does (refine 2:
 ``--set loading.magnitude=0.003125``, 1/32 of the travel; refine 4, with BLR:
-``0.00078125``, 1/128, in 32 iterations at 17.1 GB; README, *The large
-tine*). Prints a line per Newton iteration (CPU seconds of the iteration on
+``0.00078125``, 1/128, in 32 iterations at 17.1 GB; docs/performance.md,
+*The large tine*). Prints a line per Newton iteration (CPU seconds of the iteration on
 rank 0, its Krylov iterations, the peak resident memory summed over the ranks,
 the line search's trial step lengths along the previous correction, the
 points whose return mode changed since the previous iteration and the points
 in each mode, summed over the ranks), every residual norm (a failed local
 return too, with its message), and writes them with the set-up's to ``--out``
-(JSON), for the README's large-mesh row.
+(JSON), for the large tine's table of docs/performance.md.
 """
 import argparse
 import json
@@ -64,7 +64,7 @@ def stiffen_apex(alpha):
     at the apex, the stress untouched (the converged state is the same, the Newton matrix
     differs). With A = C the apex is zero stress and its tangent is zero, so a cell whose
     points are all there has no stiffness, and a cluster of them near the free surface makes
-    the Newton matrix singular (README, *The large tine*)."""
+    the Newton matrix singular (docs/performance.md, *The large tine*)."""
     integrate = ModifiedCap.integrate
 
     def stiffened(self, deps, state, guess=None):

@@ -33,7 +33,7 @@ class Element(enum.Enum):
     where the shear is measured. With 2 x 2 x 2 points, hex8 and hex8-bbar must
     meet it at every point of a cell whose shear varies (hex8-bbar with one
     dilatation for all of them): points with less shear than the cell's dilatation
-    are driven to the cone's apex and the rest lock (README, VII.3). A brick with
+    are driven to the cone's apex and the rest lock (docs/verification.md, VII.3). A brick with
     one point has hourglass modes (zero-energy nodal patterns); the supports must
     hold the mesh against them, as in the plane-strain slabs.
 

@@ -50,7 +50,8 @@ def test_the_rough_wall_s_tool_acts_on_the_plane_mesh_as_on_the_slab(solve):
 
 
 def test_quadratic_quadrilaterals_reach_prandtl_within_half_a_percent(solve):
-    """quad9-bbar (Q2/P1) on the default 2D mesh: +0.31% (README, "Run time against error")."""
+    """quad9-bbar (Q2/P1) on the default 2D mesh: +0.31% (docs/performance.md, *Run time
+    against error*)."""
     summary, _ = solve("strip-footing-von-mises", "mesh.dimension=2", "analysis.element=quad9-bbar")
     error = summary["limit_pressure"] / prandtl_limit_pressure(17.5) - 1.0
     assert 0.0 < error < 0.005

@@ -81,8 +81,8 @@ def test_coulomb_is_the_plane_limit_of_mckyes_and_alis_wedge(phi, delta):
 @pytest.mark.parametrize("phi, K0", [(25.0, 0.577), (35.0, 0.43), (40.0, 0.43)])
 def test_smooth_wall_passive_coefficient_is_rankine_within_five_percent(solve, phi, K0):
     """VII.3 with c = 0 on the default mesh (quad4-reduced): Kp 2.6-3.0% below Rankine at
-    every φ, the toe's share of the lowest element (README, VII.3). K0 = 0.43 of VII.3 lies
-    outside the c = 0 cone at depth for φ <= 30°: there Jaky's 1 − sin φ."""
+    every φ, the toe's share of the lowest element (docs/verification.md, VII.3). K0 = 0.43
+    of VII.3 lies outside the c = 0 cone at depth for φ <= 30°: there Jaky's 1 − sin φ."""
     summary, _ = solve("retaining-wall-passive", f"materials.sand.phi={phi}", f"geostatic.K0={K0}")
     assert summary["status"] == "complete"
     assert summary["passive_coefficient"] == pytest.approx(rankine_passive(phi), rel=0.05)
@@ -107,10 +107,10 @@ def test_smooth_wall_converges_to_rankine_from_below_at_first_order(solve_file):
 
 
 def test_mean_dilatation_drives_points_to_the_apex_and_locks(solve_file):
-    """The cause of quad4-bbar's (hex8-bbar's) excess (README, VII.3): one dilatation per cell
-    for points whose shear differs, so associated flow drives those with less shear to the
-    cone's apex (zero stress, 29% of the points) and over-dilates the cell: Kp 9.9% above
-    Rankine."""
+    """The cause of quad4-bbar's (hex8-bbar's) excess (docs/verification.md, VII.3): one
+    dilatation per cell for points whose shear differs, so associated flow drives those with
+    less shear to the cone's apex (zero stress, 29% of the points) and over-dilates the cell:
+    Kp 9.9% above Rankine."""
     kp, apex = passive_run(solve_file, "analysis.element=quad4-bbar", "mesh.element_size=2")
     assert apex > 0.2
     assert kp > 1.08 * rankine_passive(35.0)
@@ -201,7 +201,7 @@ def test_the_rough_wall_without_friction_is_the_smooth_wall(solve_file):
 def test_rough_wall_passive_coefficient_against_lancellottas_lower_bound(solve_file, fraction):
     """φ = 35°, δ = φ/3, φ/2, 2φ/3 on 2-in cells: Kp within 7.5% of Lancellotta's lower bound
     (measured −7.0, −4.8, −2.1%, where the smooth wall reads −5.1%: the toe; on the default
-    1-in mesh −2.5, 0.0, +4.7%, README VII.3), below Coulomb's wedge. Every contact point slips at the end: the friction V on the wall
+    1-in mesh −2.5, 0.0, +4.7%, docs/verification.md, VII.3), below Coulomb's wedge. Every contact point slips at the end: the friction V on the wall
     (upward: the soil rises along it, and the wall drags it down) is the interface's normal
     force N times tan δ; P also counts the toe's reaction, which carries no friction."""
     phi, delta = 35.0, 35.0 * fraction

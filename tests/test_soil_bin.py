@@ -123,8 +123,8 @@ def test_the_tines_newton_matrix_is_the_derivative_of_its_residual(amplitude):
     """The assembled Newton matrix of the tine (hex8-bbar, the modified cap on its failure
     surface, apex, cap and cap corner, and elastic at the smaller amplitude; Mohr–Coulomb
     contact points separated, slipping and sticking) against central differences of the
-    residual at a random state (README, *The large tine*: the stall of the fine mesh is
-    not an inconsistent tangent). Measured: 1e-11 and 3e-10."""
+    residual at a random state (docs/performance.md, *The large tine*: the stall of the fine
+    mesh is not an inconsistent tangent). Measured: 1e-11 and 3e-10."""
     problem = make_problem("tine-2in-90deg", *COARSE)
     error, trial = jacobian_error(problem, amplitude=amplitude)
     assert error < 1e-8

@@ -26,8 +26,8 @@ examples:
 
 exit status: 0 done (with loading.until_collapse = true a force-controlled run
 that stops at the soil's limit counts as done: status "collapse", at the first
-step whose displacement per unit load is 100 times the first step's or that
-cannot be converged), 1 the run could not reach the
+step whose displacement per unit load is 100 times the secant one at the first
+nominal load step, or that cannot be converged), 1 the run could not reach the
 full load (converged steps are on disk), 2 bad input (the message names the
 file, the key and the accepted range), 3 internal error (one line; the
 traceback is saved to a file it names), 130 / 143 interrupted by SIGINT /

@@ -30,7 +30,7 @@ from ..records.toml_out import _scalar as toml_value
 from .cli import SCENES_DIR
 
 DONE = ("complete", "collapse")   # statuses of a case that reached its end
-#: Keys of every run summary (soilbin/run.py); a scene adds its headline keys.
+#: Keys of every run summary (soilbin/app/run.py); a scene adds its headline keys.
 SUMMARY_KEYS = ("scene", "title", "units", "overrides", "status", "converged", "message",
                 "n_cells", "n_dofs", "n_ranks", "n_steps", "load_factor", "newton_iterations",
                 "failed_newton_iterations", "cuts", "linear_solver", "setup_s", "wall_s", "cpu_s")

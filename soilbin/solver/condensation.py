@@ -10,9 +10,10 @@ S = K − Z D⁻¹ Zr (the B-bar stiffness): S x_u = r_u − Z D⁻¹ r_c, then
 x_c = D⁻¹ (r_c − Zr x_u). The blocks are submatrices of the assembled
 mixed matrix, D⁻¹ is formed cell by cell in NumPy, S by two sparse
 products, in the matrix of K (its sparsity holds them). It is what the AMG
-solver works on; for the direct solvers it did not pay (forming S cost
-about what factorising S instead of the mixed matrix saved). Dirichlet rows of the mixed matrix are identity rows with
-zero columns, so they stay identity rows of S.
+and block low-rank solvers work on; for MUMPS's LU and LDLᵀ it does not pay
+(forming S costs about what factorising S instead of the mixed matrix
+saves). Dirichlet rows of the mixed matrix are identity rows with zero
+columns, so they stay identity rows of S.
 """
 import numpy as np
 from petsc4py import PETSc

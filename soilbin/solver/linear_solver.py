@@ -20,7 +20,7 @@ symmetric, LU otherwise, block low-rank LU above ``BLR_DOFS`` unknowns):
   ICNTL(35), CNTL(7); Amestoy et al. 2015, SIAM J. Sci. Comput.
   37(3):A1451), used as the solver: each Newton correction is inexact by
   about that tolerance, which Newton absorbs. A factorisation per iterate.
-  GMRES around it (the factor as preconditioner) stalled where the Newton
+  GMRES around it (the factor as preconditioner) stalls where the Newton
   matrix is singular (a cluster of points at a vertex with a zero tangent:
   more than 170 GMRES iterations on the tine's refine 4); the factor alone,
   like LU, sets the components of its null pivots to zero. On refine 4
@@ -28,8 +28,8 @@ symmetric, LU otherwise, block low-rank LU above ``BLR_DOFS`` unknowns):
   factorisation alone at 24.6 GB.
 
 Both factorisations use the PORD ordering above ``PORD_DOFS`` unknowns
-(measured faster than MUMPS's automatic choice on the footing and the tine,
-by 0-45% for LDLᵀ); PORD aborts the process on some tiny graphs (a
+(faster than MUMPS's automatic choice on the footing and the tine, by 0-45%
+for LDLᵀ); PORD aborts the process on some tiny graphs (a
 one-element column: "no valid number of stages in multisector").
 """
 import time
@@ -43,8 +43,9 @@ from ..records.scene import LinearSolverKind
 from .condensation import CellCondensation, Uncondensed
 
 #: Above this many unknowns ``auto`` takes the block low-rank LU: with it the tine in cap
-#: soil converged its whole travel on 134 045 unknowns and its steps on 1 036 591, where
-#: GMRES + GAMG broke down or Newton stalled along its corrections (README, *The large tine*).
+#: soil converges its whole travel on 134 045 unknowns and its steps on 1 036 591, where
+#: GMRES + GAMG breaks down or Newton stalls along its corrections (docs/performance.md,
+#: *The large tine*).
 BLR_DOFS = 300_000
 #: From this many unknowns on, MUMPS orders with PORD (below: its automatic choice).
 PORD_DOFS = 5000
@@ -111,7 +112,8 @@ class LinearSolver:
             # the UCFS variant (ICNTL(36) = 1: compress before the update) and compressed
             # contribution blocks (ICNTL(37) = 1): on the tine's refine 4 (serial) a peak of
             # 16.6 GB instead of 18.4 and Newton iterations of 95-146 s instead of 118-172;
-            # refine 2: 9% less CPU, 4.5% less memory (README, *The large tine*)
+            # refine 2: 9% less CPU, 4.5% less memory (docs/performance.md, *Block low-rank
+            # settings*)
             _mumps(self._ksp, prefix + "blr_", "lu", n_dofs,
                    mat_mumps_icntl_35=1, mat_mumps_cntl_7=BLR_TOLERANCE,
                    mat_mumps_icntl_36=1, mat_mumps_icntl_37=1)
@@ -123,13 +125,13 @@ class LinearSolver:
         ksp = self._ksp
         ksp.setOptionsPrefix(prefix + "amg_")
         options = PETSc.Options(prefix + "amg_")
-        # GMRES even when symmetric: CG met indefinite GAMG preconditioners on the footing.
-        # Smoother: Chebyshev on SOR (the default tine with AMG: 35 GMRES iterations per
+        # GMRES even when symmetric: CG meets indefinite GAMG preconditioners on the footing.
+        # Smoother: Chebyshev on SOR (tine-2in-90deg with AMG: 35 GMRES iterations per
         # solve against 81 on Jacobi, the same Newton iterations). GAMG leaves a few
         # singleton aggregates, whose rotations are zero columns of the prolongator and so
         # zero rows of the coarse operator; the diagonal shift lets SOR pass them. Classical
         # Gram-Schmidt with a second pass where it loses orthogonality: without it GMRES
-        # broke down (KSP reason -5) in the second Newton iteration of the tine on refine 4
+        # breaks down (KSP reason -5) in the second Newton iteration of the tine on refine 4
         # after 400 iterations; with it, it converges in 158.
         for key, value in {"ksp_type": "gmres", "ksp_rtol": KRYLOV_RTOL,
                            "ksp_max_it": 1000, "ksp_gmres_restart": 200,

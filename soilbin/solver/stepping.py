@@ -24,9 +24,10 @@ from typing import Protocol, Sequence
 
 from ..errors import ConvergenceError
 
-#: Newton iterations of an easy step (the increment doubles) and of a hard one (it halves)
-#: (5 and 10: the fewest iterations on the footing's refine 1-4 with the scenes' residual
-#: floor of 1e-6, against 6, 4 and 8; README, "Other thresholds of the step-size rule").
+#: Newton iterations of an easy step (the increment doubles) and of a hard one (it halves):
+#: 5 and 10 take the footing's refine 1-4 in the fewest iterations at the scenes' residual
+#: floor of 1e-6 (58, 73, 90, 95; 4 and 8 take 63, 79, 94, 99; docs/performance.md,
+#: *Newton's residual floor and the step rule*).
 EASY, HARD = 5, 10
 
 
