@@ -1,21 +1,22 @@
-"""The README's scene table, model list and builder list are those of the code."""
+"""The user guide's scene table, model list and builder list are those of the code, and its
+default of `make run` is the Makefile's."""
 import re
 
 from soilbin.meshes import BUILDERS
 from soilbin.models import MODELS
 from conftest import ROOT, SCENES
 
-README = (ROOT / "README.md").read_text()
+GUIDE = (ROOT / "docs" / "user-guide.md").read_text()
 
 
 def section_names(heading, row):
     """The backticked first-column names of the lines matching ``row`` after ``heading``,
     up to the next heading."""
-    text = README.split(heading, 1)[1].split("\n#", 1)[0]
+    text = GUIDE.split(heading, 1)[1].split("\n#", 1)[0]
     return [m.group(1) for m in re.finditer(row, text, flags=re.MULTILINE)]
 
 
-def test_the_scene_table_lists_every_scene_once():
+def test_the_scene_table_has_one_row_per_scene():
     names = section_names("| scene | problem | headline |", r"^\| `([\w-]+)` \|")
     assert sorted(names) == sorted(p.stem for p in SCENES.glob("*.toml"))
 
@@ -23,7 +24,7 @@ def test_the_scene_table_lists_every_scene_once():
 def test_the_default_of_make_run_is_the_makefiles():
     default = re.search(r"^SCENE\s*\?=\s*scenes/([\w-]+)\.toml", (ROOT / "Makefile").read_text(),
                         flags=re.MULTILINE).group(1)
-    rows = [line for line in README.splitlines() if "default of `make run`" in line]
+    rows = [line for line in GUIDE.splitlines() if "default of `make run`" in line]
     assert len(rows) == 1 and rows[0].startswith(f"| `{default}` |")
 
 
