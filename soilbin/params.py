@@ -150,7 +150,7 @@ def from_table(cls, table, where):
 
 
 def describe(cls):
-    """Lines 'name: type, range, default - doc' for --help and the README."""
+    """Lines 'name (type, in RANGE, default VALUE): doc' of a parameter record, for --help."""
     hints = typing.get_type_hints(cls)
     lines = []
     for f in dataclasses.fields(cls):

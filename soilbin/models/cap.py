@@ -57,7 +57,7 @@ it (with eta_d = 0 the mean stress stays the trial's, so shear alone no
 longer drives a point up the surface into the cap corner, the vertex without
 bulk stiffness) and the plastic volume (history ``eps_p_vol``).
 
-How the OCR'd equations were read. The dissertation writes J1 tension
+How the OCR'd equations are read. The dissertation writes J1 tension
 positive in the exponentials: B.9 "fF = sqrt(J2D) - A + C e^{beta J1}" is
 sqrt(J2) = A - C exp(-beta I1) with I1 compression positive (the classical
 form: strength rising from A - C at I1 = 0 to the von Mises plateau A). B.12
@@ -86,12 +86,11 @@ dilates on the failure surface, at the apex and on the cut-off. This is the
 dissertation's model: ch. IV.2 "a cap which can expand or contract depending
 on loading or unloading conditions", app. C "the cap model is capable of
 handling unloading situation by contraction", and B.11 with the algorithm of
-its refs. [21, 60] (DiMaggio & Sandler, Sandler & Rubin). It is not yet the
-default: on the tine its first load step needs more Newton iterations than
-with ``cap_compaction`` and, on the coarse tine of tests/test_soil_bin.py,
-meets Newton iterates with more compaction than W at which no return exists
-(README, chapter VIII). With ``cap_compaction`` (the default, the model before
-issue 12) only the compaction produced on the cap moves it: it never
+its refs. [21, 60] (DiMaggio & Sandler, Sandler & Rubin). The default is
+``cap_compaction``: with ``volumetric`` the tine's first load step needs more
+Newton iterations and, on the coarse tine of tests/test_soil_bin.py, meets
+Newton iterates with more compaction than W, at which no return exists. With
+``cap_compaction`` only the compaction produced on the cap moves it: it never
 retreats, and its centre may start on the tension side (L_min = 3 p_lo); its
 corner with the failure surface is then a perfectly plastic vertex with no
 bulk stiffness. Under hydrostatic loading
