@@ -24,6 +24,10 @@ from doc_tables import FIGURES, ROOT, add_page_argument, write_between_markers  
 
 SCENE = ROOT / "scenes" / "container-footing.toml"
 SOILBIN = Path(sys.executable).with_name("soilbin")
+#: The scene's materials in words, for the legend and the table.
+MODEL_WORDS = {"drucker_prager": "Drucker–Prager", "modified_cap": "modified cap",
+               "dimaggio_sandler": "DiMaggio–Sandler cap", "modified_cam_clay": "modified Cam-Clay",
+               "cam_clay": "Cam-Clay"}
 
 
 def run(material, out):
@@ -58,7 +62,8 @@ def main():
     fig, ax = plt.subplots(figsize=(6, 4.2))
     for material, (summary, rows) in results.items():
         ax.plot([0] + [w for w, _ in rows], [0] + [p for _, p in rows], "o-", ms=3,
-                label=f"{material} ({summary['status']})")
+                label=MODEL_WORDS.get(material, material)
+                + ("" if summary["status"] == "complete" else f" ({summary['status']})"))
     ax.set_xlabel("footing settlement [in]")
     ax.set_ylabel("footing pressure [psi] (compression +)")
     ax.set_title("VII.5 strip footing in the container", fontsize=10)
@@ -71,12 +76,12 @@ def main():
 
     settlements = (0.05, 0.2, 0.4)
     order = sorted(results, key=lambda m: -pressure_at(results[m][1], settlements[-1]))
-    head = ["model"] + [f"pressure at {w} in [psi]" for w in settlements] + ["Newton", "wall (s)"]
+    head = ["model"] + [f"pressure at {w} in [psi]" for w in settlements] + ["Newton", "CPU (s)"]
     lines = [head, ["---"] * len(head)]
     for m in order:
         summary, rows = results[m]
-        lines.append([m] + [f"{pressure_at(rows, w):.3g}" for w in settlements]
-                     + [summary["newton_iterations"], f"{summary['wall_s']:.1f}"])
+        lines.append([MODEL_WORDS.get(m, m)] + [f"{pressure_at(rows, w):.3g}" for w in settlements]
+                     + [summary["newton_iterations"], f"{summary['cpu_s']:.1f}"])
     text = "\n".join("| " + " | ".join(map(str, line)) + " |" for line in lines) + "\n"
     print(text)
     write_between_markers(args.page, "container", text)
