@@ -94,6 +94,12 @@ def case_table(results):
     return "\n".join(lines)
 
 
+#: The case whose sections at 108 lb the page shows (figures 8.10-8.12: the 2-in tool against
+#: the side wall with the interface), copied as sections-side-wall-108.png.
+SECTIONS_CASE = {"mesh.configuration": "side_wall", "mesh.tool_width": "2", "mesh.rake_angle": "90",
+                 "tool.bonded": "false", "analysis.large_deformation": "false"}
+
+
 def volume_change_table(results):
     """Increments of the front element's volumetric strain per 12-lb step, x 10^3."""
     picked = {values["analysis.large_deformation"]: rows for values, _, rows, _, _ in results
@@ -133,6 +139,11 @@ def main():
     print(text)
     for figure in study.figures:
         shutil.copy(args.out / f"{figure.name}.png", args.figures / f"{figure.name}.png")
+    sections = next((case for values, _, _, _, case in results if all(
+        values[key] == value for key, value in SECTIONS_CASE.items())), None)
+    if sections is not None and (args.out / sections.name / "sections-108.png").is_file():
+        shutil.copy(args.out / sections.name / "sections-108.png",
+                    args.figures / "sections-side-wall-108.png")
     write_between_markers(args.page, "chapter8", text)
 
 
