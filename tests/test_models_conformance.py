@@ -73,7 +73,8 @@ def bad_values(cls):
             for bound, is_open, outward in ((rng.lo, rng.lo_open, -1.0),
                                             (rng.hi, rng.hi_open, 1.0)):
                 if math.isfinite(bound):
-                    yield f.name, bound if is_open else bound + outward
+                    # a step outside a closed bound that survives rounding (1e20 + 1 == 1e20)
+                    yield f.name, bound if is_open else bound + outward * max(1.0, 1e-9 * abs(bound))
                 elif is_open:
                     yield f.name, bound
         elif isinstance(hints[f.name], type) and issubclass(hints[f.name], enum.Enum):
