@@ -99,7 +99,7 @@ def test_a_loaded_boundary_draws_its_pressure_against_its_settlement():
 
 
 def test_axes_words_of_curve_columns_summary_keys_and_swept_keys():
-    from soilbin.plotting import column_label, key_label, key_value, summary_label
+    from soilbin.app.figure_labels import column_label, key_label, key_value, summary_label
     from soilbin.records.scene import load_scene
     tine = load_scene(ROOT / "scenes" / "tine-2in-90deg.toml")
     assert [column_label(c, tine) for c in ("lift", "wall_s", "newton_iterations")] == [

@@ -2,7 +2,8 @@
 import numpy as np
 from mpi4py import MPI
 
-from ..plotting import column_label, pyplot, wrapped
+from ..plotting import pyplot, wrapped
+from .figure_labels import column_label
 from ..records.scene import TOOL
 
 #: An estimate above this many times the curve's largest force is named in the legend only.

@@ -10,7 +10,8 @@ to rank 0, which draws.
 import numpy as np
 from mpi4py import MPI
 
-from ..plotting import key_words, pyplot, wrapped
+from ..plotting import pyplot, wrapped
+from .figure_labels import key_words
 
 
 def _node_plane(coordinates, target, comm):

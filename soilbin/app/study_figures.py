@@ -1,12 +1,12 @@
 """Overlay figures of a study: the cases' curves, or a summary value against a swept key.
 
-Axes read as quantities with units ("draft [lb]", "rake [°]", plotting), legends
+Axes read as quantities with units ("draft [lb]", "rake [°]", figure_labels), legends
 as the cases' labels or their swept values in words ("tool width 2 in").
 """
 import csv
 
-from ..plotting import (FROM_REST, column_label, key_label, key_value, pyplot, summary_label,
-                        wrapped)
+from ..plotting import pyplot, wrapped
+from .figure_labels import FROM_REST, column_label, key_label, key_value, summary_label
 from .study import DONE
 
 
