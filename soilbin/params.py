@@ -61,8 +61,8 @@ def param(default=dataclasses.MISSING, *, lo=None, hi=None,
 #: bottom. Within it the products a run forms stay inside double precision (1.8e308 to
 #: 2.2e-308): squared stresses in the return map, stress x strain x volume in the assembly,
 #: the residual norm (PETSc sums unscaled squares: an entry above 1e154 makes it inf) and a
-#: load over a modulus (a strain of at most 1e40). At a load of 1e300 the norm is inf, the
-#: Newton target max(rtol, atol) x inf is met and a step "converges" with nothing done.
+#: load over a modulus (a strain of at most 1e40). At a load of 1e300 the norm is inf and
+#: Newton can only fail the step.
 MAGNITUDE = Range(1e-20, 1e20)
 
 
