@@ -35,5 +35,6 @@ autodoc_member_order = "bysource"
 
 html_theme = "furo"
 html_title = "soilbin"
-html_static_path = []
+html_static_path = ["_static"]
+html_css_files = ["tables.css"]
 html_show_sourcelink = False
