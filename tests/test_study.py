@@ -175,6 +175,25 @@ def test_the_chapter_viii_cases_are_labelled():
                          "interface, large deformation"]
 
 
+@pytest.mark.parametrize("path", sorted((ROOT / "studies").glob("*.toml")), ids=lambda p: p.stem)
+def test_every_shipped_study_loads_with_distinct_cases(path):
+    """Each study's scene and every case's overrides pass the scene reader (what
+    `soilbin study --dry-run` checks), and no two cases share a folder."""
+    study = load_study(path)
+    names = [case.name for case in study.cases]
+    assert names and len(set(names)) == len(names)
+
+
+def test_the_chapter_viii_cases_are_titled_by_their_tool():
+    """The sections and curve of a case name its own tool, not the default scene's."""
+    study = load_study(ROOT / "studies" / "chapter8.toml")
+    for case in study.cases:
+        values, title = case.values, case.scene.title
+        where = "against the side wall" if values["mesh.configuration"] == "side_wall" else "embedded"
+        assert where in title and f"{values['mesh.tool_width']}-in" in title
+        assert ("bonded" if values["tool.bonded"] else "interface") in title
+
+
 def test_an_earlier_run_stands_only_for_the_same_overrides_and_scene(tmp_path):
     case = load_study(study_file(tmp_path, COLUMN)).cases[0]
     folder = tmp_path / case.name
