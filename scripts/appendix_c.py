@@ -3,9 +3,13 @@ simple shear) driven at one material point with the section VII.5 parameters.
 
 Runs `soilbin point modified_cap PATH` for the four paths (confining 10 psi)
 and draws their stress paths and stress-strain curves on one PNG
-(runs/appendix-c/appendix-c.png); each run folder keeps its own CSV and PNG.
+(runs/appendix-c/appendix-c.png, copied into docs/figures: --figures DIR); each
+run folder keeps its own CSV and PNG. The extension path takes the longest
+(its mixed control keeps cutting steps at the cap's corner).
 """
+import argparse
 import csv
+import shutil
 import os
 import subprocess
 import sys
@@ -43,6 +47,10 @@ def run(path, settings):
 
 
 def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--figures", type=Path, default=ROOT / "docs" / "figures",
+                        help="copy the figure into this folder (default docs/figures)")
+    args = parser.parse_args()
     fig, (paths, curves) = plt.subplots(1, 2, figsize=(11, 4.2))
     for name, settings in TESTS.items():
         rows = run(name, settings)
@@ -66,6 +74,7 @@ def main():
     fig.suptitle("Appendix C tests, modified cap (VII.5 parameters)", fontsize=10)
     fig.tight_layout()
     fig.savefig(OUT / "appendix-c.png", dpi=120)
+    shutil.copy(OUT / "appendix-c.png", args.figures / "appendix-c.png")
     print(OUT / "appendix-c.png")
 
 

@@ -49,7 +49,7 @@ def test_uniaxial_strain_of_mccormick_ranch_sand():
     assert state["cap_X"][0] == pytest.approx(0.1093, abs=1e-4)
     assert all(r[2]["yield_state"][0] == S_CAP for r in rows)
     # The cap that never retreats starts from the apex side (L = -0.133 ksi): tensile
-    # lateral stress and 21 % more axial stress (issue 12).
+    # lateral stress and 21 % more axial stress.
     old_axial, old_lateral, old = uniaxial_strain(NEVER_RETREATS, 50, 1e-4)[-1]
     assert NEVER_RETREATS.initial_state(1)["cap_L"][0] == pytest.approx(-0.133, abs=1e-3)
     assert old_lateral == pytest.approx(-0.016, abs=1e-3)

@@ -102,8 +102,8 @@ def test_condensed_system_reproduces_the_mixed_solution():
 def test_a_diverging_step_is_cut_early():
     """The whole settlement in one full-Newton step diverges; it is cut long before the
     iteration limit (25), and the stepper records the iterations it cost. (On edge cells
-    of 0.02, the scene's before issue 11: on its 0.005 full Newton needs steps below the
-    1/32 of the settlement that 5 cuts reach.)"""
+    of 0.02: on the scene's 0.005 full Newton needs steps below the 1/32 of the settlement
+    that 5 cuts reach.)"""
     problem = make_problem("strip-footing-von-mises", "loading.steps=1", "mesh.edge_size=0.02",
                            "solver.line_search=basic")
     problem.set_load_factor(1.0)
@@ -122,8 +122,8 @@ def test_the_critical_point_line_search_stops_where_the_energy_is_stationary():
     """From the start of a step that full Newton cannot take (the whole settlement at once),
     the cp step ends where g(λ) = R(x + λ dx)·dx is within CP_TOLERANCE of g(0) = R(x)·dx,
     or at the full step while the energy still falls; the step then converges."""
-    # edge cells of 0.02 (the scene's before issue 11): on its 0.005 the whole settlement
-    # in one step takes more than 25 iterations
+    # edge cells of 0.02: on the scene's 0.005 the whole settlement in one step takes more
+    # than 25 iterations
     problem = make_problem("strip-footing-von-mises", "loading.steps=1", "mesh.edge_size=0.02",
                            "solver.line_search=cp")
     newton = problem.newton
