@@ -78,6 +78,7 @@ def _parser(point_details=True):
     _point_parser(sub, point_details)
     from .study import add_parser as add_study_parser
     add_study_parser(sub)
+    _calibrate_parser(sub)
     return parser
 
 
@@ -100,6 +101,48 @@ examples:
 exit status: 0 done, 1 a step could not be converged (the converged steps are
 written), 2 bad input.
 """
+
+
+CALIBRATE_EPILOG = """\
+the file (columns named as in path.csv of 'soilbin point', compression positive):
+  model = "drucker_prager"         # any model of 'soilbin point'
+  stress_unit = "psi"              # optional: the stress unit on the figures' axes
+  [fit]                            # parameter = [lower, start, upper]
+  c   = [0.1, 1.0, 10.0]
+  phi = [10.0, 25.0, 45.0]
+  [fixed]                          # every other parameter the model needs
+  E = 4000.0
+  nu = 0.35
+  matching = "compression_cone"
+  [[test]]                         # one table per laboratory curve
+  path = "triaxial-compression"    # a path of 'soilbin point'
+  set = { confining = 5.0 }        # its path keys (path.KEY of 'soilbin point')
+  data = "tx5.csv"                 # measured points, relative to this file
+  x = "eps_axial"                  # the column the points are placed at (monotone)
+  y = ["q", "eps_v"]               # the columns compared
+  weight = 1.0                     # optional
+
+output (in --out): summary.json (status, parameters, standard_errors,
+correlation, unidentified parameters, rms per test, nfev, wall_s),
+material.toml ([materials.NAME] to paste into a scene), fit.csv (measured
+against fitted at every point), fit-TEST.png (one per test).
+
+exit status: 0 converged, 1 not converged (every output written), 2 bad input.
+"""
+
+
+def _calibrate_parser(sub):
+    calibrate = sub.add_parser(
+        "calibrate", help="fit a model's parameters to laboratory curves",
+        description="Fit a constitutive model's parameters to measured laboratory curves: each "
+        "test's model curve is that of 'soilbin point' along its path, interpolated at the measured x; "
+        "every compared column is scaled by its measured range; one least-squares fit "
+        "(trust-region reflective, within the bounds) from the start values.",
+        epilog=CALIBRATE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    calibrate.add_argument("file", metavar="FILE.toml", type=Path, help="the calibration file")
+    calibrate.add_argument("--out", type=Path, help="output folder (default: runs/calibrate-STEM)")
+    calibrate.add_argument("--json", action="store_true",
+                           help="the last stdout line is the summary as one JSON object")
 
 
 def _point_parser(sub, details=True):
@@ -258,6 +301,25 @@ def _point(args):
     return 0 if summary["converged"] else 1
 
 
+def _calibrate(args):
+    from ..calibration.output import calibrate
+    summary = calibrate(args.file, args.out)
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        errors = summary["standard_errors"]
+        for name in summary["fitted"]:
+            se = errors[name]
+            print(f"{name} = {summary['parameters'][name]:.6g} "
+                  f"± {'unidentified' if se is None else f'{se:.3g}'}")
+        for name, reason in summary["unidentified"].items():
+            print(f"unidentified: {name}: {reason}")
+        print(f"{summary['status']}: rms {summary['rms']['overall']:.3g} (scaled), "
+              f"{summary['nfev']} evaluations, {summary['wall_s']} s; results in "
+              f"{summary['out']}", file=sys.stderr)
+    return 0 if summary["status"] == "converged" else 1
+
+
 def _study(args):
     from .study import study_command
     return study_command(args)
@@ -303,7 +365,7 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     args = _parser(point_details="point" in argv).parse_args(argv)
     command = {"run": _run, "list": _list_scenes, "point": _point, "keys": _keys,
-               "study": _study}[args.command]   # only run loads DOLFINx
+               "study": _study, "calibrate": _calibrate}[args.command]   # only run loads DOLFINx
     with interrupt.handlers():
         try:
             return command(args)

@@ -1,0 +1,1 @@
+"""Calibration: a model's parameters fitted to laboratory curves (``soilbin calibrate``)."""

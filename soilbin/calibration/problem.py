@@ -1,0 +1,211 @@
+"""The calibration file (``soilbin calibrate FILE.toml``), read and checked before any fit.
+
+Every measured column carries the name of a column of ``soilbin point``'s path.csv
+(``eps_axial``, ``eps_v``, ``p``, ``q``, ``sigma_axial``, ...): compression positive, the
+driver's convention, in the units of the scene the material is meant for.
+"""
+import csv
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..material_point.driver import BASE_COLUMNS, build_model, build_path
+from ..models import MODELS
+from ..records.toml_in import read_toml
+
+#: Columns a test may compare or place its points at (path.csv's numeric columns).
+COLUMNS = tuple(c for c in BASE_COLUMNS if c not in ("step", "leg"))
+TOP_KEYS = ("model", "fit", "fixed", "test", "stress_unit")
+TEST_KEYS = ("path", "set", "data", "x", "y", "weight")
+
+
+@dataclasses.dataclass(frozen=True)
+class LabTest:
+    """One laboratory curve: the path that reproduces it and its measured columns."""
+    name: str          # the data file's stem (unique within the calibration)
+    path_name: str
+    path_params: object
+    x: str
+    y: tuple
+    measured: dict     # column -> (n,) array, x increasing
+    weight: float
+
+    @property
+    def scale(self):
+        """(len(y),) range of each compared column: stresses and strains weigh alike."""
+        return np.array([np.ptp(self.measured[c]) or 1.0 for c in self.y])
+
+
+@dataclasses.dataclass(frozen=True)
+class Calibration:
+    file: Path
+    model_name: str
+    fitted: tuple      # names of the fitted parameters
+    lower: np.ndarray
+    start: np.ndarray
+    upper: np.ndarray
+    fixed: dict
+    tests: tuple
+    stress_unit: str
+
+    def table(self, values):
+        """The model's parameter table at the fitted ``values``."""
+        return {**self.fixed, **{k: float(v) for k, v in zip(self.fitted, values)}}
+
+    def model(self, values):
+        """The model record at ``values`` (InputError where the model refuses them)."""
+        return build_model(self.model_name, self.table(values))
+
+
+def read_calibration(path):
+    """The checked :class:`Calibration` of ``path``; every problem is an InputError naming
+    the file, the test, the column or row and what is accepted."""
+    path = Path(path)
+    doc = read_toml(path)
+    where = str(path)
+    _known_keys(doc, TOP_KEYS, where)
+    model_name = doc.get("model")
+    if model_name not in MODELS:
+        raise InputError(f"{where}: model = {model_name!r}; known: {', '.join(MODELS)}")
+    fitted, bounds = _fit_table(doc.get("fit"), where)
+    fixed = doc.get("fixed", {})
+    if not isinstance(fixed, dict):
+        raise InputError(f"{where}: [fixed] must be a table of parameter = value")
+    both = sorted(set(fitted) & set(fixed))
+    if both:
+        raise InputError(f"{where}: {both[0]!r} is both in [fit] and in [fixed]; give it in one")
+    _all_parameters(model_name, fitted, fixed, where)
+    lower, start, upper = bounds.T
+    try:
+        build_model(model_name, {**fixed, **dict(zip(fitted, start.tolist()))})
+    except InputError as err:
+        raise InputError(f"{where}: at the start values: {err}") from None
+    tests = _tests(doc.get("test"), path)
+    points = sum(t.measured[t.x].size * len(t.y) for t in tests)
+    if points < len(fitted):
+        raise InputError(f"{where}: {points} measured values for {len(fitted)} fitted "
+                         f"parameters; accepted: at least as many values as parameters")
+    return Calibration(path, model_name, tuple(fitted), lower, start, upper, dict(fixed),
+                       tests, str(doc.get("stress_unit", "psi")))
+
+
+def _known_keys(table, keys, where):
+    unknown = sorted(set(table) - set(keys))
+    if unknown:
+        raise InputError(f"{where}: unknown key {unknown[0]!r}; accepted keys: {', '.join(keys)}")
+
+
+def _fit_table(fit, where):
+    """(names, (n, 3) array of lower, start, upper) of the [fit] table."""
+    if not isinstance(fit, dict) or not fit:
+        raise InputError(f"{where}: [fit] must name at least one parameter = [lower, start, upper]")
+    rows = []
+    for name, value in fit.items():
+        ok = (isinstance(value, list) and len(value) == 3
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                      and math.isfinite(v) for v in value))
+        if not ok:
+            raise InputError(f"{where}: fit.{name} = {value!r}; accepted: [lower, start, upper], "
+                             f"three finite numbers")
+        lower, start, upper = value
+        if not lower < upper:
+            raise InputError(f"{where}: fit.{name}: lower {lower!r} is not below upper {upper!r}")
+        if not lower <= start <= upper:
+            raise InputError(f"{where}: fit.{name}: start {start!r} is outside "
+                             f"[{lower!r}, {upper!r}]")
+        rows.append([float(v) for v in value])
+    return list(fit), np.array(rows)
+
+
+def _all_parameters(model_name, fitted, fixed, where):
+    """Every parameter the model needs is in [fit] or [fixed]; none is unknown."""
+    fields = {f.name: f for f in dataclasses.fields(MODELS[model_name]) if f.init}
+    given = set(fitted) | set(fixed)
+    unknown = sorted(given - set(fields))
+    if unknown:
+        raise InputError(f"{where}: {unknown[0]!r} is not a parameter of {model_name}; "
+                         f"accepted: {', '.join(fields)}")
+    missing = [n for n, f in fields.items() if n not in given and f.default is dataclasses.MISSING]
+    if missing:
+        raise InputError(f"{where}: {', '.join(map(repr, missing))} missing from both [fit] "
+                         f"and [fixed]; {model_name} needs it")
+
+
+def _tests(tables, file):
+    if not isinstance(tables, list) or not tables or not all(isinstance(t, dict) for t in tables):
+        raise InputError(f"{file}: no [[test]]; accepted: one or more [[test]] tables")
+    tests = [_test(t, file, f"{file}: test {i}") for i, t in enumerate(tables, 1)]
+    names = [t.name for t in tests]
+    if len(set(names)) < len(names):
+        tests = [dataclasses.replace(t, name=f"{i}-{t.name}") for i, t in enumerate(tests, 1)]
+    return tuple(tests)
+
+
+def _test(table, file, where):
+    _known_keys(table, TEST_KEYS, where)
+    path_table = table.get("set", {})
+    if not isinstance(path_table, dict):
+        raise InputError(f"{where}: set must be a table of path keys, e.g. {{ confining = 5.0 }}")
+    try:
+        path_params = build_path(table.get("path"), path_table)
+    except InputError as err:
+        raise InputError(f"{where}: {err}") from None
+    x, y = table.get("x"), table.get("y")
+    y = [y] if isinstance(y, str) else y
+    if not isinstance(y, list) or not y:
+        raise InputError(f"{where}: y = {y!r}; accepted: a column or a list of columns, "
+                         f"of {', '.join(COLUMNS)}")
+    for column in [x, *y]:
+        if column not in COLUMNS:
+            raise InputError(f"{where}: column {column!r} (x, y); accepted: {', '.join(COLUMNS)}")
+    weight = table.get("weight", 1.0)
+    if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not weight > 0:
+        raise InputError(f"{where}: weight = {weight!r}; accepted: a positive number")
+    data = table.get("data")
+    if not isinstance(data, str):
+        raise InputError(f"{where}: data = {data!r}; accepted: a CSV file relative to {file}")
+    measured = _read_curve(file.parent / data, x, y, where)
+    return LabTest(Path(data).stem, table["path"], path_params, x, tuple(y), measured,
+                   float(weight))
+
+
+def _read_curve(csv_path, x, y, where):
+    """{column: array} of the measured columns, x strictly monotone (made increasing)."""
+    where = f"{where}: {csv_path}"
+    if not csv_path.is_file():
+        raise InputError(f"{where}: no such data file")
+    with open(csv_path, newline="") as f:
+        reader = csv.reader(f)
+        header = [h.strip() for h in next(reader, [])]
+        rows = [row for row in reader if row]
+    missing = [c for c in [x, *y] if c not in header]
+    if missing:
+        raise InputError(f"{where}: no column {missing[0]!r}; the file has: {', '.join(header)}")
+    columns = {c: _numbers(rows, header.index(c), c, where) for c in [x, *y]}
+    steps = np.diff(columns[x])
+    if not (np.all(steps > 0) or np.all(steps < 0)):
+        k = int(np.argmax(steps <= 0) if steps[0] > 0 else np.argmax(steps >= 0))
+        raise InputError(f"{where}: column {x!r} (x) is not strictly monotone at row {k + 3}; "
+                         f"accepted: strictly increasing or decreasing values")
+    order = np.argsort(columns[x])
+    return {c: v[order] for c, v in columns.items()}
+
+
+def _numbers(rows, index, column, where):
+    """The column's finite values; row numbers count the header as row 1."""
+    values = []
+    for k, row in enumerate(rows, 2):
+        try:
+            value = float(row[index])
+        except (ValueError, IndexError):
+            value = math.nan
+        if not math.isfinite(value):
+            raise InputError(f"{where}: row {k}, column {column!r}: "
+                             f"{row[index] if index < len(row) else ''!r} is not a finite number")
+        values.append(value)
+    if len(values) < 2:
+        raise InputError(f"{where}: column {column!r} has {len(values)} rows; accepted: at least 2")
+    return np.array(values)

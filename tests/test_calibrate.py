@@ -1,0 +1,181 @@
+"""soilbin calibrate: parameters recovered from synthetic laboratory curves made by the
+material-point driver itself (1% Gaussian noise of each column's range, fixed seed),
+honest standard errors and unidentified parameters, and bad input refused before fitting."""
+import json
+import tomllib
+
+import numpy as np
+import pytest
+
+from soilbin.app.cli import main
+from soilbin.calibration.fit import FAILED_RESIDUAL, residuals
+from soilbin.calibration.output import calibrate
+from soilbin.calibration.problem import read_calibration
+from soilbin.material_point.driver import build_model, build_path, drive
+from soilbin.models import MODELS
+from soilbin.params import from_table
+
+DP_TRUTH = {"c": 2.0, "phi": 30.0}
+DP_FIXED = {"E": 4000.0, "nu": 0.35, "matching": "compression_cone"}
+CONFINING = (5.0, 10.0, 20.0)
+STEPS = 20
+NOISE = 0.01
+
+
+def synthetic_curve(model_name, table, path, settings, x, y, rng, leg):
+    """The driver's rows of ``leg`` at the true parameters as a CSV text, with Gaussian
+    noise of NOISE times each compared column's range."""
+    rows = drive(build_model(model_name, table), build_path(path, settings), path).rows
+    rows = [r for r in rows if r["leg"] == leg]
+    columns = {c: np.array([r[c] for r in rows]) for c in (x, *y)}
+    for c in y:
+        columns[c] = columns[c] + NOISE * np.ptp(columns[c]) * rng.standard_normal(len(rows))
+    lines = [",".join((x, *y))] + [",".join(f"{columns[c][k]:.12g}" for c in (x, *y))
+                                   for k in range(len(rows))]
+    return "\n".join(lines) + "\n"
+
+
+def toml_value(v):
+    return json.dumps(v) if not isinstance(v, dict) else \
+        "{ " + ", ".join(f"{k} = {toml_value(w)}" for k, w in v.items()) + " }"
+
+
+def write_calibration(folder, model, fit, fixed, tests):
+    """FILE.toml of the calibration; ``tests``: (data name, csv text, table) each."""
+    lines = [f"model = {toml_value(model)}", "[fit]"]
+    lines += [f"{k} = {toml_value(v)}" for k, v in fit.items()]
+    lines += ["[fixed]"] + [f"{k} = {toml_value(v)}" for k, v in fixed.items()]
+    for name, text, table in tests:
+        (folder / name).write_text(text)
+        lines += ["[[test]]"] + [f"{k} = {toml_value(v)}" for k, v in
+                                 {**table, "data": name}.items()]
+    path = folder / "fit.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def dp_tests(seed=1):
+    rng = np.random.default_rng(seed)
+    table = {**DP_TRUTH, **DP_FIXED}
+    tests = []
+    for confining in CONFINING:
+        settings = {"confining": confining, "steps": STEPS}
+        text = synthetic_curve("drucker_prager", table, "triaxial-compression", settings,
+                               "eps_axial", ("q", "eps_v"), rng, "shear")
+        tests.append((f"tx{confining:g}.csv", text, {"path": "triaxial-compression",
+                                                     "set": settings, "x": "eps_axial",
+                                                     "y": ["q", "eps_v"]}))
+    return tests
+
+
+def dp_file(folder, start=(1.0, 25.0)):
+    fit = {"c": [0.1, start[0], 20.0], "phi": [5.0, start[1], 50.0]}
+    return write_calibration(folder, "drucker_prager", fit, DP_FIXED, dp_tests())
+
+
+def assert_recovered(summary, truth):
+    assert summary["status"] == "converged"
+    for name, value in truth.items():
+        fitted, se = summary["parameters"][name], summary["standard_errors"][name]
+        assert abs(fitted - value) <= 0.02 * value, (name, fitted, value)
+        assert abs(fitted - value) <= 2.0 * se, (name, fitted, value, se)
+    assert summary["unidentified"] == {}
+
+
+def test_drucker_prager_c_and_phi_from_three_triaxial_tests(tmp_path):
+    summary = calibrate(dp_file(tmp_path), tmp_path / "out")
+    assert_recovered(summary, DP_TRUTH)
+    out = tmp_path / "out"
+    assert {p.name for p in out.iterdir()} == set(summary["files"])
+    assert json.loads((out / "summary.json").read_text())["parameters"] == summary["parameters"]
+    # fit.csv: measured against fitted at every point of every compared column
+    fit_rows = (out / "fit.csv").read_text().splitlines()
+    assert len(fit_rows) == 1 + len(CONFINING) * 2 * STEPS   # the shear leg's rows
+
+
+def test_a_start_far_from_the_truth_still_finds_it(tmp_path):
+    summary = calibrate(dp_file(tmp_path, start=(15.0, 8.0)), tmp_path / "out")
+    assert_recovered(summary, DP_TRUTH)
+
+
+def test_material_toml_read_back_by_the_scene_reader(tmp_path):
+    summary = calibrate(dp_file(tmp_path), tmp_path / "out")
+    tables = tomllib.loads((tmp_path / "out" / "material.toml").read_text())["materials"]
+    table = dict(tables[summary["material"]])
+    model = from_table(MODELS[table.pop("model")], table, "materials.fit")
+    assert model.c == summary["parameters"]["c"] and model.phi == summary["parameters"]["phi"]
+    assert model.E == DP_FIXED["E"]
+
+
+def test_e_and_nu_from_one_hydrostatic_test_names_nu_unidentified(tmp_path, capsys):
+    rng = np.random.default_rng(2)
+    settings = {"pressure": 50.0, "unload": False, "steps": STEPS}
+    text = synthetic_curve("elastic", {"E": 4000.0, "nu": 0.3}, "hydrostatic", settings,
+                           "p", ("eps_v",), rng, "load")
+    path = write_calibration(tmp_path, "elastic", {"E": [500.0, 2000.0, 20000.0],
+                                                   "nu": [0.0, 0.2, 0.45]}, {},
+                             [("iso.csv", text, {"path": "hydrostatic", "set": settings,
+                                                 "x": "p", "y": "eps_v"})])
+    status = main(["calibrate", str(path), "--out", str(tmp_path / "out"), "--json"])
+    summary = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert status in (0, 1) and status == (summary["status"] != "converged")
+    assert "nu" in summary["unidentified"]
+    assert "triaxial" in summary["unidentified"]["nu"]
+
+
+def bad_input_cases():
+    """(id, edit of the valid DP files, words the message must hold)."""
+    return [
+        ("missing column", ("tx5.csv", "eps_axial,q,eps_v", "eps_axial,qq,eps_v"), ["tx5.csv", "'q'"]),
+        ("non-numeric column", ("tx5.csv", "\n0", "\nabc"), ["tx5.csv", "row 2", "'eps_axial'"]),
+        ("row not a number", ("tx10.csv", "\n0", "\nnan"), ["tx10.csv", "row 2"]),
+        ("x not monotone", ("tx20.csv", "eps_axial,q,eps_v\n", "eps_axial,q,eps_v\n1,1,1\n"),
+         ["tx20.csv", "'eps_axial'", "monotone"]),
+        ("fixed and fitted", ("fit.toml", "nu = 0.35", "nu = 0.35\nc = 1.0"), ["'c'", "[fixed]"]),
+        ("missing from both", ("fit.toml", "nu = 0.35\n", ""), ["'nu'", "missing"]),
+        ("y not a column list", ("fit.toml", "y = [\"q\", \"eps_v\"]", "y = []"), ["test 1", "y = []"]),
+        ("bounds cross", ("fit.toml", "[0.1, 1.0, 20.0]", "[30.0, 1.0, 20.0]"), ["fit.c", "upper"]),
+        ("start outside", ("fit.toml", "[0.1, 1.0, 20.0]", "[0.1, 25.0, 20.0]"), ["fit.c", "start"]),
+        ("unknown model", ("fit.toml", '"drucker_prager"', '"drucker"'), ["'drucker'", "known"]),
+        ("unknown path key", ("fit.toml", "confining = 5.0", "confinement = 5.0"),
+         ["test 1", "'confinement'", "accepted keys"]),
+        ("model's own check", ("fit.toml", "nu = 0.35", "nu = 0.7"), ["nu", "accepted range"]),
+    ]
+
+
+@pytest.mark.parametrize("name, edit, words", bad_input_cases(), ids=[c[0] for c in bad_input_cases()])
+def test_bad_input_is_refused_before_fitting(tmp_path, capsys, name, edit, words):
+    path = dp_file(tmp_path)
+    file, old, new = edit
+    text = (tmp_path / file).read_text()
+    assert old in text
+    (tmp_path / file).write_text(text.replace(old, new, 1))
+    status = main(["calibrate", str(path), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert len(err.strip().splitlines()) == 1
+    for word in words:
+        assert word in err, (word, err)
+    assert not (tmp_path / "out").exists()
+
+
+def test_fewer_points_than_parameters_is_refused(tmp_path, capsys):
+    text = "eps_axial,q\n0.01,5\n0.02,6\n"
+    path = write_calibration(tmp_path, "drucker_prager",
+                             {"E": [500.0, 2000.0, 2e4], "c": [0.1, 1.0, 20.0],
+                              "phi": [5.0, 25.0, 50.0]}, {"nu": 0.35, "matching": "compression_cone"},
+                             [("short.csv", text, {"path": "triaxial-compression",
+                                                   "set": {"confining": 5.0}, "x": "eps_axial",
+                                                   "y": ["q"]})])
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "2 measured values for 3 fitted parameters" in err and str(path) in err
+
+
+def test_parameters_the_model_refuses_give_a_large_residual(tmp_path):
+    """psi = 25 fixed: a trial phi below it is refused by the model, not by the fit."""
+    calibration = read_calibration(write_calibration(
+        tmp_path, "drucker_prager", {"c": [0.1, 1.0, 20.0], "phi": [5.0, 30.0, 50.0]},
+        {**DP_FIXED, "psi": 25.0}, dp_tests()))
+    assert np.all(residuals(np.array([2.0, 30.0]), calibration) < 10.0)
+    assert np.all(residuals(np.array([2.0, 20.0]), calibration) == FAILED_RESIDUAL)
