@@ -107,6 +107,32 @@ def test_material_toml_read_back_by_the_scene_reader(tmp_path):
     assert model.E == DP_FIXED["E"]
 
 
+MCC_TRUTH = {"lam": 0.2, "kappa": 0.04, "phi": 30.0}
+MCC_FIXED = {"E": 1.0e4, "nu": 0.3, "e0": 1.0, "p_c0": 100.0, "elasticity": "pressure_dependent"}
+MCC_TESTS = (   # data, path, its keys, x, y, the leg measured
+    ("drained.csv", "triaxial-compression", {"axial_strain": 0.1}, "eps_axial", ("q", "eps_v"),
+     "shear"),
+    ("undrained.csv", "undrained-triaxial", {}, "eps_axial", ("q", "p"), "shear"),
+    ("isotropic.csv", "hydrostatic", {"pressure": 400.0, "unload": False}, "p", ("eps_v",),
+     "load"))
+
+
+def test_modified_cam_clay_lambda_kappa_m_from_drained_undrained_and_isotropic(tmp_path):
+    """M through the critical-state friction angle phi (M = 6 sin phi / (3 - sin phi));
+    every test from p = 100 on the normal compression line."""
+    rng = np.random.default_rng(3)
+    tests = []
+    for data, path, keys, x, y, leg in MCC_TESTS:
+        settings = {"p_initial": 100.0, "steps": STEPS, **keys}
+        text = synthetic_curve("modified_cam_clay", {**MCC_TRUTH, **MCC_FIXED}, path, settings,
+                               x, y, rng, leg)
+        tests.append((data, text, {"path": path, "set": settings, "x": x, "y": list(y)}))
+    fit = {"lam": [0.05, 0.1, 0.5], "kappa": [0.005, 0.02, 0.09], "phi": [15.0, 25.0, 45.0]}
+    summary = calibrate(write_calibration(tmp_path, "modified_cam_clay", fit, MCC_FIXED, tests),
+                        tmp_path / "out")
+    assert_recovered(summary, MCC_TRUTH)
+
+
 def test_e_and_nu_from_one_hydrostatic_test_names_nu_unidentified(tmp_path, capsys):
     rng = np.random.default_rng(2)
     settings = {"pressure": 50.0, "unload": False, "steps": STEPS}
