@@ -107,6 +107,15 @@ def test_material_toml_read_back_by_the_scene_reader(tmp_path):
     assert model.E == DP_FIXED["E"]
 
 
+@pytest.mark.parametrize("units, stress", [(None, "psi"), ('"kN, m"', "kPa"),
+                                           ('"any consistent units"', "F/L²")])
+def test_the_figures_stress_unit_is_read_as_a_scene_reads_its_units(tmp_path, units, stress):
+    path = dp_file(tmp_path)
+    if units is not None:
+        path.write_text(f"units = {units}\n" + path.read_text())
+    assert read_calibration(path).stress_unit == stress
+
+
 MCC_TRUTH = {"lam": 0.2, "kappa": 0.04, "phi": 30.0}
 MCC_FIXED = {"E": 1.0e4, "nu": 0.3, "e0": 1.0, "p_c0": 100.0, "elasticity": "pressure_dependent"}
 MCC_TESTS = (   # data, path, its keys, x, y, the leg measured

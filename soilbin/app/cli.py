@@ -106,7 +106,7 @@ written), 2 bad input.
 CALIBRATE_EPILOG = """\
 the file (columns named as in path.csv of 'soilbin point', compression positive):
   model = "drucker_prager"         # any model of 'soilbin point'
-  stress_unit = "psi"              # optional: the stress unit on the figures' axes
+  units = "lb, in"                 # optional, as a scene's: the figures' stress unit (psi)
   [fit]                            # parameter = [lower, start, upper]
   c   = [0.1, 1.0, 10.0]
   phi = [10.0, 25.0, 45.0]

@@ -15,10 +15,11 @@ from ..errors import InputError
 from ..material_point.driver import BASE_COLUMNS, build_model, build_path
 from ..models import MODELS
 from ..records.toml_in import read_toml
+from ..records.units import read_units
 
 #: Columns a test may compare or place its points at (path.csv's numeric columns).
 COLUMNS = tuple(c for c in BASE_COLUMNS if c not in ("step", "leg"))
-TOP_KEYS = ("model", "fit", "fixed", "test", "stress_unit")
+TOP_KEYS = ("model", "units", "fit", "fixed", "test")
 TEST_KEYS = ("path", "set", "data", "x", "y", "weight")
 
 
@@ -49,7 +50,7 @@ class Calibration:
     upper: np.ndarray
     fixed: dict
     tests: tuple
-    stress_unit: str
+    stress_unit: str   # from the file's ``units``, as a scene's (records.units)
 
     def table(self, values):
         """The model's parameter table at the fitted ``values``."""
@@ -88,8 +89,11 @@ def read_calibration(path):
     if points < len(fitted):
         raise InputError(f"{where}: {points} measured values for {len(fitted)} fitted "
                          f"parameters; accepted: at least as many values as parameters")
+    units = doc.get("units", "lb, in")
+    if not isinstance(units, str):
+        raise InputError(f"{where}: units = {units!r}; accepted: a scene's units text, e.g. 'lb, in'")
     return Calibration(path, model_name, tuple(fitted), lower, start, upper, dict(fixed),
-                       tests, str(doc.get("stress_unit", "psi")))
+                       tests, read_units(units).stress)
 
 
 def _known_keys(table, keys, where):
