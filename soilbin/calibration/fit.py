@@ -47,6 +47,11 @@ class CurveFailed(Exception):
     """The model curve of a test cannot be computed at the trial parameters."""
 
 
+#: What leaves a test without a model curve at trial parameters: the driver's failures and
+#: a parameter set the model refuses (e.g. psi > phi, lam <= kappa).
+CURVE_FAILURES = (CurveFailed, ConvergenceError, ReturnMapError, InputError)
+
+
 def model_curve(model, test):
     """(x, (n, len(y)) columns) of the driver's rows along the test's path."""
     result = drive(model, test.path_params, test.path_name)
@@ -57,8 +62,12 @@ def model_curve(model, test):
 
 
 def fitted_columns(model, test):
-    """(n, len(y)) model values at the measured x; the model curve's x must increase."""
-    x, columns = model_curve(model, test)
+    """(n, len(y)) model values at the measured x."""
+    return at_measured(test, *model_curve(model, test))
+
+
+def at_measured(test, x, columns):
+    """The model curve (x, columns) at the measured x; the curve's x must increase."""
     if np.any(np.diff(x) < 0):
         raise CurveFailed(f"{test.x} of the model curve does not increase along the path")
     at = test.measured[test.x]
@@ -77,7 +86,7 @@ def curve_residuals(model, test):
         return np.full(measured.size, FAILED_RESIDUAL)
     try:
         fitted = fitted_columns(model, test)
-    except (CurveFailed, ConvergenceError, ReturnMapError, InputError):
+    except CURVE_FAILURES:
         return np.full(measured.size, FAILED_RESIDUAL)
     return (test.weight * (fitted - measured) / test.scale).ravel()
 

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConvergenceError, ReturnMapError
 from ..material_point.driver import CONVENTION
 from ..plotting import pyplot
 from ..records.toml_out import dumps
@@ -25,9 +24,6 @@ LABELS = {
     "sigma1": ("major principal stress", STRESS), "sigma2": ("intermediate principal stress", STRESS),
     "sigma3": ("minor principal stress", STRESS),
 }
-
-
-CURVE_FAILURES = (fitting.CurveFailed, ConvergenceError, ReturnMapError)
 
 
 def axis_label(column, stress_unit):
@@ -77,20 +73,25 @@ def write_material(calibration, values, path):
 
 
 def fitted_rows(calibration, model):
-    """(test, measured (n, k), fitted (n, k) or None) of every test at ``model``."""
+    """(test, measured (n, k), model curve (x, columns) or None, fitted (n, k) or None) of
+    every test at ``model``: each path driven once."""
     for test in calibration.tests:
         try:
-            fitted = fitting.fitted_columns(model, test)
-        except CURVE_FAILURES:   # the driver fails at the optimum: nothing fitted to show
+            curve = fitting.model_curve(model, test)
+        except fitting.CURVE_FAILURES:   # the driver fails at the optimum: nothing to show
+            curve = None
+        try:
+            fitted = None if curve is None else fitting.at_measured(test, *curve)
+        except fitting.CurveFailed:
             fitted = None
-        yield test, fitting.measured_columns(test), fitted
+        yield test, fitting.measured_columns(test), curve, fitted
 
 
 def write_fit_csv(rows, path):
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(["test", "x_column", "x", "column", "measured", "fitted"])
-        for test, measured, fitted in rows:
+        for test, measured, _, fitted in rows:
             x = test.measured[test.x]
             for j, column in enumerate(test.y):
                 model = fitted[:, j] if fitted is not None else np.full(x.size, np.nan)
@@ -98,18 +99,14 @@ def write_fit_csv(rows, path):
                                   f"{c:.12g}"] for a, b, c in zip(x, measured[:, j], model))
 
 
-def plot_test(calibration, model, test, measured, path):
+def plot_test(calibration, test, measured, curve, path):
     """One panel per compared column: the measured points and the fitted model curve."""
     plt = pyplot()
     fig, axes = plt.subplots(1, len(test.y), figsize=(4.5 * len(test.y), 3.8), squeeze=False)
-    try:
-        x_model, columns = fitting.model_curve(model, test)
-    except CURVE_FAILURES:
-        x_model = None
     for j, (ax, column) in enumerate(zip(axes[0], test.y)):
         ax.plot(test.measured[test.x], measured[:, j], "o", ms=3, label="measured")
-        if x_model is not None:
-            ax.plot(x_model, columns[:, j], "-", label="fitted model")
+        if curve is not None:
+            ax.plot(curve[0], curve[1][:, j], "-", label="fitted model")
         ax.set_xlabel(axis_label(test.x, calibration.stress_unit))
         ax.set_ylabel(axis_label(column, calibration.stress_unit))
         ax.grid(alpha=0.3)
@@ -132,8 +129,8 @@ def calibrate(file, out=None):
     rows = list(fitted_rows(calibration, model))
     write_material(calibration, result.values, out / "material.toml")
     write_fit_csv(rows, out / "fit.csv")
-    for test, measured, _ in rows:
-        plot_test(calibration, model, test, measured, out / f"fit-{test.name}.png")
+    for test, measured, curve, _ in rows:
+        plot_test(calibration, test, measured, curve, out / f"fit-{test.name}.png")
     summary["files"] = (["summary.json", "material.toml", "fit.csv"]
                         + [f"fit-{t.name}.png" for t in calibration.tests])
     summary["out"] = str(out)
