@@ -13,6 +13,7 @@ from soilbin.calibration.output import calibrate
 from soilbin.calibration.problem import read_calibration
 from soilbin.material_point.driver import build_model, build_path, drive
 from soilbin.models import MODELS
+from soilbin.models.cap import SECTION_VII5
 from soilbin.params import from_table
 
 DP_TRUTH = {"c": 2.0, "phi": 30.0}
@@ -214,3 +215,110 @@ def test_parameters_the_model_refuses_give_a_large_residual(tmp_path):
         {**DP_FIXED, "psi": 25.0}, dp_tests()))
     assert np.all(residuals(np.array([2.0, 30.0]), calibration) < 10.0)
     assert np.all(residuals(np.array([2.0, 20.0]), calibration) == FAILED_RESIDUAL)
+
+
+CAP_TRUTH = {k: v for k, v in SECTION_VII5.items() if k not in ("nu", "B")}
+CAP_FIXED = {"nu": SECTION_VII5["nu"], "B": SECTION_VII5["B"]}
+SEATING = 1.0   # psi: every cap test starts from it (a seating pressure, as in the laboratory)
+
+
+def hydrostatic_with_unloading(table, rng, pressure=100.0):
+    """(settings, csv text with a leg column) of a hydrostatic test loaded to ``pressure``
+    and unloaded to the seating pressure: p is not monotone, each leg is."""
+    settings = {"p_initial": SEATING, "pressure": pressure, "steps": 10}
+    rows = drive(build_model("modified_cap", table), build_path("hydrostatic", settings),
+                 "hydrostatic").rows[1:]
+    eps_v = np.array([r["eps_v"] for r in rows])
+    eps_v = eps_v + NOISE * np.ptp(eps_v) * rng.standard_normal(eps_v.size)
+    return settings, "leg,p,eps_v\n" + "".join(f"{r['leg']},{r['p']:.12g},{e:.12g}\n"
+                                               for r, e in zip(rows, eps_v))
+
+
+def test_a_leg_column_places_the_unloading_points_on_the_unloading_leg(tmp_path):
+    """E from the unloading leg's slope (nu fixed), W and D from the loading leg's
+    compaction: one hydrostatic test with unloading fixes the three."""
+    settings, text = hydrostatic_with_unloading({**CAP_TRUTH, **CAP_FIXED},
+                                                np.random.default_rng(4))
+    fixed = {**CAP_FIXED, **{k: CAP_TRUTH[k] for k in ("A", "C", "beta", "R")}}
+    path = write_calibration(tmp_path, "modified_cap",
+                             {"E": [500.0, 2000.0, 20000.0], "W": [0.05, 0.1, 0.5],
+                              "D": [0.005, 0.03, 0.5]}, fixed,
+                             [("hydro.csv", text, {"path": "hydrostatic", "set": settings,
+                                                   "x": "p", "y": "eps_v"})])
+    summary = calibrate(path, tmp_path / "out")
+    assert_recovered(summary, {k: CAP_TRUTH[k] for k in ("E", "W", "D")})
+    legs = {row.split(",")[1] for row in (tmp_path / "out" / "fit.csv").read_text().splitlines()[1:]}
+    assert legs == {"load", "unload"}
+
+
+@pytest.mark.slow
+def test_modified_cap_from_three_triaxial_tests_and_a_hydrostatic_test(tmp_path):
+    """E, A, C, beta, R, W, D of the section VII.5 soil (nu, B fixed) from triaxial
+    compression at 2, 6 and 20 psi and a hydrostatic test to 100 psi with unloading."""
+    rng = np.random.default_rng(5)
+    table = {**CAP_TRUTH, **CAP_FIXED}
+    tests = []
+    for confining in (2.0, 6.0, 20.0):
+        settings = {"p_initial": SEATING, "confining": confining, "confining_steps": 5,
+                    "axial_strain": 0.1, "steps": 10}
+        text = synthetic_curve("modified_cap", table, "triaxial-compression", settings,
+                               "eps_axial", ("q", "eps_v"), rng, "shear")
+        tests.append((f"tx{confining:g}.csv", text, {"path": "triaxial-compression",
+                                                     "set": settings, "x": "eps_axial",
+                                                     "y": ["q", "eps_v"]}))
+    settings, text = hydrostatic_with_unloading(table, rng)
+    tests.append(("hydro.csv", text, {"path": "hydrostatic", "set": settings, "x": "p",
+                                      "y": "eps_v"}))
+    fit = {"E": [500.0, 2000.0, 20000.0], "A": [1.0, 4.0, 20.0], "C": [0.5, 4.0, 20.0],
+           "beta": [0.005, 0.05, 0.5], "R": [0.5, 1.5, 5.0], "W": [0.05, 0.1, 0.5],
+           "D": [0.005, 0.03, 0.5]}
+    summary = calibrate(write_calibration(tmp_path, "modified_cap", fit, CAP_FIXED, tests),
+                        tmp_path / "out")
+    assert_recovered(summary, CAP_TRUTH)
+
+
+def test_a_fit_stopped_before_converging_keeps_its_best_point(tmp_path, capsys):
+    path = dp_file(tmp_path)
+    path.write_text("max_evaluations = 2\n" + path.read_text())
+    status = main(["calibrate", str(path), "--out", str(tmp_path / "out"), "--json"])
+    summary = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert status == 1 and summary["status"] == "not converged"
+    assert summary["nfev"] == 2 and summary["evaluations"] > summary["nfev"]
+    assert {p.name for p in (tmp_path / "out").iterdir()} == set(summary["files"])
+    start_cost = float(np.sum(residuals(np.array([1.0, 25.0]), read_calibration(path)) ** 2))
+    best = np.array([summary["parameters"][k] for k in ("c", "phi")])
+    assert np.sum(residuals(best, read_calibration(path)) ** 2) < start_cost
+
+
+def test_a_model_curve_that_cannot_meet_its_data_is_refused_before_fitting(tmp_path, capsys):
+    """Loading points of a hydrostatic test with unloading, no leg column: p of the model
+    curve turns back along the path, so the points have no place on it."""
+    settings, text = hydrostatic_with_unloading({**CAP_TRUTH, **CAP_FIXED},
+                                                np.random.default_rng(4))
+    text = "p,eps_v\n" + "".join(line.split(",", 1)[1] + "\n"
+                                 for line in text.splitlines() if line.startswith("load,"))
+    path = write_calibration(tmp_path, "modified_cap", {"W": [0.05, 0.1, 0.5]},
+                             {**CAP_FIXED, **{k: v for k, v in CAP_TRUTH.items() if k != "W"}},
+                             [("hydro.csv", text, {"path": "hydrostatic", "set": settings,
+                                                   "x": "p", "y": "eps_v"})])
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "'hydro'" in err and "not monotone along the path" in err and "'leg'" in err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("edit, words", [
+    (("load,", "loading,"), ["row 2", "'loading'", "accepted: load, unload"]),
+    (("unload,", "load,"), ["'p' (x)", "along leg 'load'", "row 12"])],
+    ids=["unknown leg", "x not monotone along a leg"])
+def test_bad_leg_columns_are_refused(tmp_path, capsys, edit, words):
+    settings, text = hydrostatic_with_unloading({**CAP_TRUTH, **CAP_FIXED},
+                                                np.random.default_rng(4))
+    path = write_calibration(tmp_path, "modified_cap", {"W": [0.05, 0.1, 0.5]},
+                             {**CAP_FIXED, **{k: v for k, v in CAP_TRUTH.items() if k != "W"}},
+                             [("hydro.csv", text.replace(*edit, 1), {
+                                 "path": "hydrostatic", "set": settings, "x": "p", "y": "eps_v"})])
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    for word in words:
+        assert word in err, (word, err)

@@ -225,12 +225,12 @@ def test_help_lists_every_path(capsys):
 
 
 def test_path_targets_are_linear_in_the_leg():
-    from soilbin.material_point.paths import PATHS
+    from soilbin.material_point.paths import PATHS, targets
     legs = PATHS["triaxial-compression"](confining=10.0, axial_strain=0.02).legs()
     assert [leg.name for leg in legs] == ["confine", "shear"]
     shear = legs[1]
     eps0, sigma0 = np.array([1, 1, 1, 0, 0, 0]) * -1e-3, -10.0 * np.array([1, 1, 1, 0, 0, 0])
-    target = shear.targets(eps0, sigma0, 0.5)
+    target = targets(shear.stress_controlled, np.array(shear.end), eps0, sigma0, 0.5)
     assert list(shear.stress_controlled) == [True, True, False, False, False, False]
     assert target[:2] == pytest.approx([-10.0, -10.0])      # lateral stress held
     assert target[2] == pytest.approx(-1e-3 - 0.01)         # half the axial strain
@@ -251,3 +251,29 @@ def test_appendix_c_paths_of_the_modified_cap_run(tmp_path, path, settings):
         args += ["--set", s]
     assert main(args) == 0
     assert (tmp_path / "path.png").exists()
+
+
+def test_paths_driven_together_give_each_path_alone():
+    """drive_all steps the points of several paths in one vectorised update; each point
+    keeps its own Newton iteration and step cuts, so each path's rows are those of its
+    own run (to rounding), whatever the others do."""
+    from soilbin.material_point.driver import build_model, build_path, drive, drive_all
+    from soilbin.models.cap import SECTION_VII5
+    model = build_model("modified_cap", dict(SECTION_VII5))
+    paths = [(build_path(name, table), name) for name, table in [
+        ("hydrostatic", {"pressure": 30.0, "steps": 10}),
+        ("triaxial-compression", {"confining": 10.0, "steps": 10}),
+        ("simple-shear", {"confining": 10.0, "steps": 15}),
+        ("undrained-triaxial", {"confining": 5.0, "steps": 5}),
+        ("triaxial-extension", {"confining": 10.0, "steps": 2, "axial_strain": 0.01})]]
+    together = drive_all(model, paths)
+    for (params, name), result in zip(paths, together):
+        alone = drive(model, params, name)
+        assert result.converged and len(result.rows) == len(alone.rows)
+        assert [r["leg"] for r in result.rows] == [r["leg"] for r in alone.rows]
+        for a, b in zip(result.rows, alone.rows):
+            for key, value in b.items():
+                if key != "leg":
+                    assert a[key] == pytest.approx(value, rel=1e-12, abs=1e-12), (name, key)
+        assert (result.newton_iterations, result.cuts) == (alone.newton_iterations, alone.cuts)
+    assert together[-1].cuts > 0   # the extension's steps are cut at the cap's corner

@@ -107,6 +107,7 @@ CALIBRATE_EPILOG = """\
 the file (columns named as in path.csv of 'soilbin point', compression positive):
   model = "drucker_prager"         # any model of 'soilbin point'
   units = "lb, in"                 # optional, as a scene's: the figures' stress unit (psi)
+  max_evaluations = 200            # optional: the fit stops there (not converged, exit 1)
   [fit]                            # parameter = [lower, start, upper]
   c   = [0.1, 1.0, 10.0]
   phi = [10.0, 25.0, 45.0]
@@ -118,12 +119,13 @@ the file (columns named as in path.csv of 'soilbin point', compression positive)
   path = "triaxial-compression"    # a path of 'soilbin point'
   set = { confining = 5.0 }        # its path keys (path.KEY of 'soilbin point')
   data = "tx5.csv"                 # measured points, relative to this file
-  x = "eps_axial"                  # the column the points are placed at (monotone)
+  x = "eps_axial"                  # the column the points are placed at (monotone;
+                                   # along each leg with a 'leg' column, as in path.csv)
   y = ["q", "eps_v"]               # the columns compared
   weight = 1.0                     # optional
 
 output (in --out): summary.json (status, parameters, standard_errors,
-correlation, unidentified parameters, rms per test, nfev, wall_s),
+correlation, unidentified parameters, rms per test, evaluations, wall_s),
 material.toml ([materials.NAME] to paste into a scene), fit.csv (measured
 against fitted at every point), fit-TEST.png (one per test).
 
@@ -315,7 +317,7 @@ def _calibrate(args):
         for name, reason in summary["unidentified"].items():
             print(f"unidentified: {name}: {reason}")
         print(f"{summary['status']}: rms {summary['rms']['overall']:.3g} (scaled), "
-              f"{summary['nfev']} evaluations, {summary['wall_s']} s; results in "
+              f"{summary['evaluations']} evaluations, {summary['wall_s']} s; results in "
               f"{summary['out']}", file=sys.stderr)
     return 0 if summary["status"] == "converged" else 1
 

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..errors import ConvergenceError, InputError, ReturnMapError
-from ..material_point.driver import drive
+from ..material_point.driver import drive_all
 
 #: Scaled residual of every point of a test whose model curve cannot be computed at
 #: the trial parameters (the driver fails, or the model refuses them): large against
@@ -24,6 +24,9 @@ FAILED_RESIDUAL = 1.0e3
 #: largest one, or a correlation above CORRELATION_MAX: the data do not fix the parameter.
 SINGULAR_RTOL = 1.0e-4
 CORRELATION_MAX = 0.99
+#: Relative step of the Jacobian's finite differences: the model curves are converged to
+#: a relative 1e-10 (the driver's RTOL), so their derivatives to about 1e-4.
+DIFF_STEP = 1.0e-6
 #: The tests that fix a parameter, by its name (said next to an unidentified parameter).
 FIXED_BY = {
     "E": "the initial slope of a triaxial test (q against eps_axial)",
@@ -52,52 +55,98 @@ class CurveFailed(Exception):
 CURVE_FAILURES = (CurveFailed, ConvergenceError, ReturnMapError, InputError)
 
 
-def model_curve(model, test):
-    """(x, (n, len(y)) columns) of the driver's rows along the test's path."""
-    result = drive(model, test.path_params, test.path_name)
-    if not result.converged:
-        raise CurveFailed(result.message)
-    table = np.array([[row[c] for c in (test.x, *test.y)] for row in result.rows])
-    return table[:, 0], table[:, 1:]
+@dataclasses.dataclass(frozen=True)
+class Curve:
+    """A test's model curve: the driver's rows along its path, each with its leg."""
+    legs: np.ndarray     # (n,) leg of each row ('initial' first)
+    x: np.ndarray        # (n,)
+    columns: np.ndarray  # (n, len(y))
+
+    def leg(self, name):
+        """(x, columns) of the leg ``name`` from the row it starts at (the last one of the
+        leg before); the whole curve for ''."""
+        rows = np.flatnonzero(self.legs == name) if name else np.arange(self.legs.size)
+        rows = np.concatenate([[rows[0] - 1], rows]) if rows.size and rows[0] > 0 else rows
+        return self.x[rows], self.columns[rows]
 
 
-def fitted_columns(model, test):
-    """(n, len(y)) model values at the measured x."""
-    return at_measured(test, *model_curve(model, test))
+def model_curves(model, tests):
+    """The :class:`Curve` of every test at ``model`` (a :class:`CurveFailed` where the
+    driver fails): all paths driven together (:func:`drive_all`)."""
+    try:
+        results = drive_all(model, [(t.path_params, t.path_name) for t in tests])
+    except CURVE_FAILURES as err:   # the model cannot start from a test's initial state
+        return [CurveFailed(str(err))] * len(tests)
+    curves = []
+    for test, result in zip(tests, results):
+        if not result.converged:
+            curves.append(CurveFailed(result.message))
+            continue
+        table = np.array([[row[c] for c in (test.x, *test.y)] for row in result.rows])
+        curves.append(Curve(np.array([row["leg"] for row in result.rows]), table[:, 0],
+                            table[:, 1:]))
+    return curves
 
 
-def at_measured(test, x, columns):
-    """The model curve (x, columns) at the measured x; the curve's x must increase."""
-    if np.any(np.diff(x) < 0):
-        raise CurveFailed(f"{test.x} of the model curve does not increase along the path")
-    at = test.measured[test.x]
-    return np.column_stack([np.interp(at, x, columns[:, j]) for j in range(columns.shape[1])])
+def at_measured(test, curve):
+    """(n, len(y)) model values at the measured x, leg by leg; raises the curve's
+    CurveFailed, or one where its x is not monotone along a measured leg."""
+    if isinstance(curve, CurveFailed):
+        raise curve
+    fitted = np.empty((test.legs.size, len(test.y)))
+    for leg in np.unique(test.legs):
+        x, columns = curve.leg(leg)
+        if np.all(np.diff(x) <= 0):   # an unloading leg: x decreases
+            x, columns = x[::-1], columns[::-1]
+        if x.size < 2 or np.any(np.diff(x) < 0):
+            raise CurveFailed(f"{test.x} of the model curve is not monotone along "
+                              f"{f'leg {leg!r}' if leg else 'the path'}; give the data a "
+                              f"'leg' column naming each row's leg of the path")
+        at = test.measured[test.x][test.legs == leg]
+        fitted[test.legs == leg] = np.column_stack([np.interp(at, x, columns[:, j])
+                                                    for j in range(columns.shape[1])])
+    return fitted
 
 
 def measured_columns(test):
     return np.column_stack([test.measured[c] for c in test.y])
 
 
-def curve_residuals(model, test):
+def curve_residuals(test, curve):
     """The test's scaled, weighted residuals (fitted - measured), FAILED_RESIDUAL where
     its model curve cannot be computed."""
     measured = measured_columns(test)
-    if model is None:
-        return np.full(measured.size, FAILED_RESIDUAL)
     try:
-        fitted = fitted_columns(model, test)
-    except CURVE_FAILURES:
+        fitted = at_measured(test, curve)
+    except CurveFailed:
         return np.full(measured.size, FAILED_RESIDUAL)
     return (test.weight * (fitted - measured) / test.scale).ravel()
 
 
-def residuals(values, calibration):
-    """The residual vector of all tests at the fitted parameter ``values``."""
+def trial_curves(values, calibration):
+    """The model curves of every test at the fitted parameter ``values``."""
     try:
         model = calibration.model(values)
-    except InputError:   # e.g. psi > phi, lam <= kappa at a trial point
-        model = None
-    return np.concatenate([curve_residuals(model, t) for t in calibration.tests])
+    except InputError as err:   # e.g. psi > phi, lam <= kappa at a trial point
+        return [CurveFailed(str(err))] * len(calibration.tests)
+    return model_curves(model, calibration.tests)
+
+
+def residuals(values, calibration):
+    """The residual vector of all tests at the fitted parameter ``values``."""
+    return np.concatenate([curve_residuals(t, c) for t, c in
+                           zip(calibration.tests, trial_curves(values, calibration))])
+
+
+def check_start(calibration):
+    """InputError naming the first test whose model curve cannot be compared with its
+    data at the start values: the fit would have nothing to start from."""
+    for test, curve in zip(calibration.tests, trial_curves(calibration.start, calibration)):
+        try:
+            at_measured(test, curve)
+        except CurveFailed as err:
+            raise InputError(f"{calibration.file}: test {test.name!r} at the start values: "
+                             f"{err}") from None
 
 
 @dataclasses.dataclass
@@ -107,6 +156,7 @@ class Fit:
     message: str
     nfev: int
     njev: int
+    evaluations: int   # of every test's model curve: the fit's and its Jacobians'
     residuals: np.ndarray
     jacobian: np.ndarray
     wall_s: float
@@ -115,10 +165,50 @@ class Fit:
 def fit(calibration):
     """Least squares from the start values within the bounds."""
     start = time.perf_counter()
-    result = least_squares(residuals, calibration.start, args=(calibration,), method="trf",
-                           bounds=(calibration.lower, calibration.upper), x_scale="jac")
+    last = {"evaluations": 0}   # the residuals at the last trial: the base of its Jacobian
+
+    def fun(values):
+        last["values"], last["r"] = values.copy(), residuals(values, calibration)
+        last["evaluations"] += 1
+        return last["r"]
+
+    def jac(values):
+        r = last["r"] if np.array_equal(values, last.get("values")) else fun(values)
+        J, evaluations = jacobian(values, r, calibration)
+        last["evaluations"] += evaluations
+        return J
+
+    result = least_squares(fun, calibration.start, jac=jac, method="trf",
+                           bounds=(calibration.lower, calibration.upper), x_scale="jac",
+                           max_nfev=calibration.max_evaluations)
     return Fit(result.x, result.status > 0, result.message, int(result.nfev),
-               int(result.njev or 0), result.fun, result.jac, time.perf_counter() - start)
+               int(result.njev or 0), last["evaluations"], result.fun, result.jac,
+               time.perf_counter() - start)
+
+
+def jacobian(values, r, calibration):
+    """Forward differences of the residuals ``r`` at ``values``, each step of DIFF_STEP
+    times the parameter's size; backwards where the forward step leaves the bounds or a
+    model curve fails there (a parameter on the edge of the set the model accepts, e.g.
+    C = A of a cohesionless cap, whose curves cannot start beyond it). A column whose
+    curves fail on both sides is zero: the parameter is reported unidentified.
+    Returns (Jacobian, evaluations made)."""
+    columns, evaluations = [], 0
+    for i, value in enumerate(values):
+        h = DIFF_STEP * max(abs(value), abs(calibration.upper[i] - calibration.lower[i]) * 1e-3)
+        column = np.zeros(r.size)
+        for step in (h, -h):
+            if not calibration.lower[i] <= value + step <= calibration.upper[i]:
+                continue
+            trial = values.copy()
+            trial[i] += step
+            r_step = residuals(trial, calibration)
+            evaluations += 1
+            if not np.any(r_step == FAILED_RESIDUAL):
+                column = (r_step - r) / step
+                break
+        columns.append(column)
+    return np.column_stack(columns), evaluations
 
 
 def residual_variance(r, n_parameters):

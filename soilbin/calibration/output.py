@@ -59,6 +59,7 @@ def summarize(calibration, result):
         "residual_variance": variance,
         "nfev": result.nfev,
         "njev": result.njev,
+        "evaluations": result.evaluations,
         "wall_s": round(result.wall_s, 3),
         "convention": CONVENTION,
         "residual_scale": "each compared column divided by its measured range, times the "
@@ -72,31 +73,29 @@ def write_material(calibration, values, path):
                     + dumps({"materials": {material_name(calibration): table}}))
 
 
-def fitted_rows(calibration, model):
-    """(test, measured (n, k), model curve (x, columns) or None, fitted (n, k) or None) of
-    every test at ``model``: each path driven once."""
-    for test in calibration.tests:
+def fitted_rows(calibration, values):
+    """(test, measured (n, k), model curve or None, fitted (n, k) or None) of every test at
+    the fitted ``values``: the paths driven once."""
+    for test, curve in zip(calibration.tests, fitting.trial_curves(values, calibration)):
         try:
-            curve = fitting.model_curve(model, test)
-        except fitting.CURVE_FAILURES:   # the driver fails at the optimum: nothing to show
-            curve = None
-        try:
-            fitted = None if curve is None else fitting.at_measured(test, *curve)
-        except fitting.CurveFailed:
+            fitted = fitting.at_measured(test, curve)
+        except fitting.CurveFailed:   # the driver fails at the optimum: nothing to show
             fitted = None
-        yield test, fitting.measured_columns(test), curve, fitted
+        yield (test, fitting.measured_columns(test),
+               None if isinstance(curve, fitting.CurveFailed) else curve, fitted)
 
 
 def write_fit_csv(rows, path):
     with open(path, "w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(["test", "x_column", "x", "column", "measured", "fitted"])
+        writer.writerow(["test", "leg", "x_column", "x", "column", "measured", "fitted"])
         for test, measured, _, fitted in rows:
             x = test.measured[test.x]
             for j, column in enumerate(test.y):
                 model = fitted[:, j] if fitted is not None else np.full(x.size, np.nan)
-                writer.writerows([test.name, test.x, f"{a:.12g}", column, f"{b:.12g}",
-                                  f"{c:.12g}"] for a, b, c in zip(x, measured[:, j], model))
+                writer.writerows([test.name, leg, test.x, f"{a:.12g}", column, f"{b:.12g}",
+                                  f"{c:.12g}"]
+                                 for leg, a, b, c in zip(test.legs, x, measured[:, j], model))
 
 
 def plot_test(calibration, test, measured, curve, path):
@@ -106,7 +105,10 @@ def plot_test(calibration, test, measured, curve, path):
     for j, (ax, column) in enumerate(zip(axes[0], test.y)):
         ax.plot(test.measured[test.x], measured[:, j], "o", ms=3, label="measured")
         if curve is not None:
-            ax.plot(curve[0], curve[1][:, j], "-", label="fitted model")
+            for leg in np.unique(test.legs):
+                x, columns = curve.leg(leg)
+                ax.plot(x, columns[:, j], "-", color="C1",
+                        label="fitted model" if leg == test.legs[0] else None)
         ax.set_xlabel(axis_label(test.x, calibration.stress_unit))
         ax.set_ylabel(axis_label(column, calibration.stress_unit))
         ax.grid(alpha=0.3)
@@ -121,12 +123,12 @@ def calibrate(file, out=None):
     """Read, fit and write ``out`` (default runs/calibrate-<stem>); returns the summary."""
     start = time.perf_counter()
     calibration = read_calibration(file)
+    fitting.check_start(calibration)
     out = Path(out or Path("runs") / f"calibrate-{calibration.file.stem}")
     out.mkdir(parents=True, exist_ok=True)
     result = fitting.fit(calibration)
     summary = summarize(calibration, result)
-    model = calibration.model(result.values)
-    rows = list(fitted_rows(calibration, model))
+    rows = list(fitted_rows(calibration, result.values))
     write_material(calibration, result.values, out / "material.toml")
     write_fit_csv(rows, out / "fit.csv")
     for test, measured, curve, _ in rows:

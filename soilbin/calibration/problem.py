@@ -19,7 +19,7 @@ from ..records.units import read_units
 
 #: Columns a test may compare or place its points at (path.csv's numeric columns).
 COLUMNS = tuple(c for c in BASE_COLUMNS if c not in ("step", "leg"))
-TOP_KEYS = ("model", "units", "fit", "fixed", "test")
+TOP_KEYS = ("model", "units", "max_evaluations", "fit", "fixed", "test")
 TEST_KEYS = ("path", "set", "data", "x", "y", "weight")
 
 
@@ -31,7 +31,8 @@ class LabTest:
     path_params: object
     x: str
     y: tuple
-    measured: dict     # column -> (n,) array, x increasing
+    measured: dict     # column -> (n,) array, in the file's order
+    legs: np.ndarray   # (n,) the path's leg of each point ('' without a leg column)
     weight: float
 
     @property
@@ -51,6 +52,7 @@ class Calibration:
     fixed: dict
     tests: tuple
     stress_unit: str   # from the file's ``units``, as a scene's (records.units)
+    max_evaluations: int | None   # of the residual vector by the fit (None: scipy's 100 n)
 
     def table(self, values):
         """The model's parameter table at the fitted ``values``."""
@@ -92,8 +94,14 @@ def read_calibration(path):
     units = doc.get("units", "lb, in")
     if not isinstance(units, str):
         raise InputError(f"{where}: units = {units!r}; accepted: a scene's units text, e.g. 'lb, in'")
+    max_evaluations = doc.get("max_evaluations")
+    if max_evaluations is not None and (not isinstance(max_evaluations, int)
+                                        or isinstance(max_evaluations, bool)
+                                        or max_evaluations < 1):
+        raise InputError(f"{where}: max_evaluations = {max_evaluations!r}; accepted: a "
+                         f"positive integer")
     return Calibration(path, model_name, tuple(fitted), lower, start, upper, dict(fixed),
-                       tests, read_units(units).stress)
+                       tests, read_units(units).stress, max_evaluations)
 
 
 def _known_keys(table, keys, where):
@@ -171,13 +179,15 @@ def _test(table, file, where):
     data = table.get("data")
     if not isinstance(data, str):
         raise InputError(f"{where}: data = {data!r}; accepted: a CSV file relative to {file}")
-    measured = _read_curve(file.parent / data, x, y, where)
-    return LabTest(Path(data).stem, table["path"], path_params, x, tuple(y), measured,
+    measured, legs = _read_curve(file.parent / data, x, y,
+                                 [leg.name for leg in path_params.legs()], where)
+    return LabTest(Path(data).stem, table["path"], path_params, x, tuple(y), measured, legs,
                    float(weight))
 
 
-def _read_curve(csv_path, x, y, where):
-    """{column: array} of the measured columns, x strictly monotone (made increasing)."""
+def _read_curve(csv_path, x, y, path_legs, where):
+    """({column: array}, legs) of the measured columns in the file's order; x strictly
+    monotone along each leg (the whole file without a ``leg`` column)."""
     where = f"{where}: {csv_path}"
     if not csv_path.is_file():
         raise InputError(f"{where}: no such data file")
@@ -189,13 +199,31 @@ def _read_curve(csv_path, x, y, where):
     if missing:
         raise InputError(f"{where}: no column {missing[0]!r}; the file has: {', '.join(header)}")
     columns = {c: _numbers(rows, header.index(c), c, where) for c in [x, *y]}
-    steps = np.diff(columns[x])
-    if not (np.all(steps > 0) or np.all(steps < 0)):
-        k = int(np.argmax(steps <= 0) if steps[0] > 0 else np.argmax(steps >= 0))
-        raise InputError(f"{where}: column {x!r} (x) is not strictly monotone at row {k + 3}; "
-                         f"accepted: strictly increasing or decreasing values")
-    order = np.argsort(columns[x])
-    return {c: v[order] for c, v in columns.items()}
+    legs = _legs(rows, header, path_legs, where)
+    for leg in np.unique(legs):
+        at = np.flatnonzero(legs == leg)
+        steps = np.diff(columns[x][at])
+        if not (np.all(steps > 0) or np.all(steps < 0)):
+            k = int(np.argmax(steps <= 0) if steps[0] > 0 else np.argmax(steps >= 0))
+            along = f" along leg {leg!r}" if leg else ""
+            raise InputError(f"{where}: column {x!r} (x) is not strictly monotone{along} at "
+                             f"row {at[k + 1] + 2}; accepted: strictly increasing or decreasing "
+                             f"values (along each leg of a 'leg' column naming the path's legs: "
+                             f"{', '.join(path_legs)})")
+    return columns, legs
+
+
+def _legs(rows, header, path_legs, where):
+    """(n,) leg of each row: its ``leg`` column, '' (the whole path) without one."""
+    if "leg" not in header:
+        return np.full(len(rows), "")
+    index = header.index("leg")
+    legs = [row[index].strip() if index < len(row) else "" for row in rows]
+    for k, leg in enumerate(legs, 2):
+        if leg not in path_legs:
+            raise InputError(f"{where}: row {k}, column 'leg': {leg!r} is not a leg of the path; "
+                             f"accepted: {', '.join(path_legs)}")
+    return np.array(legs)
 
 
 def _numbers(rows, index, column, where):

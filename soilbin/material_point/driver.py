@@ -31,7 +31,7 @@ from ..params import from_table
 from ..plotting import pyplot
 from ..records.toml_in import assignment, read_scene_tables, scene_path
 from ..tensors import IDENTITY, SQRT2, deviator, from_mandel, trace
-from .paths import PATHS
+from .paths import PATHS, targets as path_targets
 
 #: Newton iteration of one step: relative tolerance on the stress residual,
 #: iterations before the step is cut, and cuts (halvings) of one step.
@@ -120,105 +120,161 @@ class PointResult:
     cuts: int
 
 
-class MaterialPoint:
-    """One point of ``model``: committed strain, stress, history and tangent."""
+class MaterialPoints:
+    """Points of one ``model``, each on its own path: committed strain, stress and history
+    of every point in one state, updated together (:meth:`Model.update` is vectorised)."""
 
-    def __init__(self, model, p_initial=0.0):
+    def __init__(self, model, p_initial):
         self.model = model
-        self.state = model.initial_state(1, -p_initial * IDENTITY)
-        self.eps = np.zeros(6)
-        #: Residuals below this are zero: the stress of a strain of 1e-14 (for a
-        #: point with no stress at all, where the relative tolerance has no scale).
-        self.atol = 1e-14 * np.linalg.norm(self._tangent_at_rest())
-        self.iterations = 0
-        self.max_iterations = 0
+        p_initial = np.asarray(p_initial, dtype=float)
+        self.state = model.initial_state(p_initial.size, -p_initial[:, None] * IDENTITY)
+        self.eps = np.zeros((p_initial.size, 6))
+        everyone = np.arange(p_initial.size)
+        _, tangent, _, ok = self.update(everyone, np.zeros((p_initial.size, 6)))
+        if not ok.all():
+            raise InputError(f"{type(model).__name__} cannot start from the isotropic state "
+                             f"p_initial = {p_initial[~ok][0]:g}; set path.p_initial")
+        #: Residuals below this are zero: the stress of a strain of 1e-14 (for a point with
+        #: no stress at all, where the relative tolerance has no scale).
+        self.atol = 1e-14 * np.linalg.norm(tangent, axis=(1, 2))
+        self.iterations = np.zeros(p_initial.size, dtype=int)
+        self.max_iterations = np.zeros(p_initial.size, dtype=int)
 
     @property
     def sigma(self):
-        return self.state["stress"][0]
+        return self.state["stress"]
 
-    def _tangent_at_rest(self):
-        """Tangent for a zero increment from the committed state: the elastic one on
-        the yield surface too, so the predictor also suits unloading."""
-        return self.model.update(np.zeros((1, 6)), self.state)[1][0]
+    def update(self, idx, deps):
+        """(sigma, tangent, state, ok) of the points ``idx`` for the increments ``deps``
+        from their committed state; ``ok`` False where the return map fails (found point
+        by point when the update of them all fails)."""
+        state = {name: value[idx] for name, value in self.state.items()}
+        try:
+            return (*self.model.update(deps, state), np.ones(len(idx), dtype=bool))
+        except ReturnMapError:
+            if len(idx) == 1:
+                return (np.full((1, 6), np.nan), np.full((1, 6, 6), np.nan), state,
+                        np.zeros(1, dtype=bool))
+        parts = [self.update(idx[k:k + 1], deps[k:k + 1]) for k in range(len(idx))]
+        return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                {name: np.concatenate([p[2][name] for p in parts]) for name in state},
+                np.concatenate([p[3] for p in parts]))
 
-    def solve(self, stress_ctrl, target):
-        """Advance to ``target`` (total strain where not ``stress_ctrl``, stress where
-        it is); commits on success, raises _NotConverged otherwise."""
-        s, e = stress_ctrl, ~stress_ctrl
-        deps = np.zeros(6)
-        deps[e] = target[e] - self.eps[e]
-        if s.any():   # predictor
-            C = self._tangent_at_rest()
-            deps[s] = _solve(C[np.ix_(s, s)], target[s] - self.sigma[s] - C[np.ix_(s, e)] @ deps[e])
+    def solve(self, idx, stress_ctrl, target):
+        """Advance the points ``idx`` to ``target`` ((m, 6): total strain where not
+        ``stress_ctrl``, stress where it is) by Newton's method on their stress-controlled
+        components; commits every point that converges and returns the (m,) mask of them."""
+        s = stress_ctrl
+        deps = np.where(s, 0.0, target - self.eps[idx])
+        if s.any():   # predictor from the tangent at rest (elastic on the yield surface too)
+            _, C, _, _ = self.update(idx, np.zeros_like(deps))
+            predicted = self.sigma[idx] + np.einsum("nij,nj->ni", C, deps)
+            deps -= _masked_solve(C, s, predicted - target)
+        converged = np.zeros(len(idx), dtype=bool)
+        pending = np.arange(len(idx))
         for iteration in range(1, MAX_ITERATIONS + 1):
-            try:
-                sigma, tangent, state = self.model.update(deps[None], self.state)
-            except ReturnMapError as err:
-                raise _NotConverged(str(err)) from None
-            sigma, tangent = sigma[0], tangent[0]
-            residual = sigma[s] - target[s]
-            norm = np.linalg.norm(residual)
-            tol = RTOL * max(np.linalg.norm(sigma), np.linalg.norm(self.sigma),
-                             np.linalg.norm(target[s])) + self.atol
-            if norm <= tol:
-                self.state, self.eps = state, self.eps + deps
-                self.iterations += iteration
-                self.max_iterations = max(self.max_iterations, iteration)
-                return
-            if not np.isfinite(norm):
+            points = idx[pending]
+            sigma, tangent, state, ok = self.update(points, deps[pending])
+            residual = np.where(s[pending], sigma - target[pending], 0.0)
+            norm = np.linalg.norm(residual, axis=1)
+            scale = np.maximum.reduce([np.linalg.norm(sigma, axis=1),
+                                       np.linalg.norm(self.sigma[points], axis=1),
+                                       np.linalg.norm(np.where(s[pending], target[pending], 0.0),
+                                                      axis=1)])
+            tol = RTOL * scale + self.atol[points]
+            done = ok & (norm <= tol)
+            if done.any():
+                self._commit(points[done], deps[pending[done]], state, done, iteration)
+                converged[pending[done]] = True
+            going = ok & ~done & np.isfinite(norm)
+            if not going.any():
                 break
-            deps[s] -= _solve(tangent[np.ix_(s, s)], residual)
-        raise _NotConverged(f"stress residual {norm:.3g} after {iteration} iterations, "
-                            f"tolerance {tol:.3g}")
+            deps[pending[going]] -= _masked_solve(tangent[going], s[pending[going]],
+                                                  residual[going])
+            pending = pending[going]
+        return converged
+
+    def _commit(self, points, deps, state, done, iteration):
+        for name, value in state.items():
+            self.state[name][points] = value[done]
+        self.eps[points] += deps
+        self.iterations[points] += iteration
+        self.max_iterations[points] = np.maximum(self.max_iterations[points], iteration)
 
 
-def _solve(A, b):
-    """A^-1 b, or the least-squares solution when the tangent block is singular."""
+def _masked_solve(C, s, r):
+    """(m, 6) solutions d of C[s, s] d[s] = r[s], d = 0 off ``s``: the strain-controlled
+    rows become identity rows; the least-squares solution where the block is singular."""
+    both = s[:, :, None] & s[:, None, :]
+    A = np.where(both, C, np.eye(6))
+    b = np.where(s, r, 0.0)
     try:
-        return np.linalg.solve(A, b)
+        return np.linalg.solve(A, b[..., None])[..., 0]
     except np.linalg.LinAlgError:
-        return np.linalg.lstsq(A, b, rcond=None)[0]
+        return np.stack([np.linalg.lstsq(a, c, rcond=None)[0] for a, c in zip(A, b)])
 
 
 def drive(model, path_params, path_name="path"):
     """Drive ``model`` along the path; a :class:`PointResult` with one row per step
     (the initial state is step 0). Stops at the first step that cannot be
     converged (rows so far kept, converged False)."""
-    try:
-        point = MaterialPoint(model, path_params.p_initial)
-    except ReturnMapError as err:
-        raise InputError(f"{type(model).__name__} cannot start from the isotropic state "
-                         f"p_initial = {path_params.p_initial:g} ({err}); set path.p_initial") from None
-    rows = [_row(point, 0, "initial", path_name)]
-    cuts = 0
+    return drive_all(model, [(path_params, path_name)])[0]
 
-    def advance(leg, eps0, sigma0, f0, f1, depth):
-        nonlocal cuts
-        try:
-            point.solve(leg.stress_controlled, leg.targets(eps0, sigma0, f1))
+
+def drive_all(model, paths):
+    """One :class:`PointResult` per (path parameters, path name) of ``paths``: every path
+    at its own point, the points stepped together (step j of every path that has one in
+    one vectorised update). A step of a point that does not converge is cut in halves,
+    for that point alone; a point that fails even after MAX_CUTS cuts stops there."""
+    points = MaterialPoints(model, [params.p_initial for params, _ in paths])
+    schedules = [[(leg, k) for leg in params.legs() for k in range(1, leg.steps + 1)]
+                 for params, _ in paths]
+    names = [name for _, name in paths]
+    rows = [[_row(points, i, 0, "initial", names[i])] for i in range(len(paths))]
+    messages = [""] * len(paths)
+    cuts = np.zeros(len(paths), dtype=int)
+    stress_ctrl = np.zeros((len(paths), 6), dtype=bool)
+    end = np.zeros((len(paths), 6))
+    eps0, sigma0 = points.eps.copy(), points.sigma.copy()
+
+    def advance(idx, f0, f1, depth):
+        target = path_targets(stress_ctrl[idx], end[idx], eps0[idx], sigma0[idx], f1[:, None])
+        failed = ~points.solve(idx, stress_ctrl[idx], target)
+        if not failed.any():
             return
-        except _NotConverged as err:
-            if depth >= MAX_CUTS:
-                raise ConvergenceError(
-                    f"{path_name}, leg {leg.name!r} at {f1:.6g} of the leg: the mixed-control "
-                    f"Newton iteration failed even after {MAX_CUTS} step cuts ({err}); the "
-                    f"prescribed stress may be beyond the model's strength") from None
-        cuts += 1
-        middle = 0.5 * (f0 + f1)
-        advance(leg, eps0, sigma0, f0, middle, depth + 1)
-        advance(leg, eps0, sigma0, middle, f1, depth + 1)
+        if depth >= MAX_CUTS:
+            for i, f in zip(idx[failed], f1[failed]):
+                leg = schedules[i][len(rows[i]) - 1][0]
+                messages[i] = (f"{names[i]}, leg {leg.name!r} at {f:.6g} of the leg: the "
+                               f"mixed-control Newton iteration failed even after {MAX_CUTS} "
+                               f"step cuts; the prescribed stress may be beyond the model's "
+                               f"strength")
+            return
+        cuts[idx[failed]] += 1
+        middle = 0.5 * (f0[failed] + f1[failed])
+        advance(idx[failed], f0[failed], middle, depth + 1)
+        alive = np.array([not messages[i] for i in idx[failed]], dtype=bool)
+        if alive.any():
+            advance(idx[failed][alive], middle[alive], f1[failed][alive], depth + 1)
 
-    message = ""
-    try:
-        for leg in path_params.legs():
-            eps0, sigma0 = point.eps.copy(), point.sigma.copy()
-            for k in range(1, leg.steps + 1):
-                advance(leg, eps0, sigma0, (k - 1) / leg.steps, k / leg.steps, 0)
-                rows.append(_row(point, len(rows), leg.name, path_name))
-    except ConvergenceError as err:
-        message = str(err)
-    return PointResult(rows, not message, message, point.iterations, point.max_iterations, cuts)
+    for j in range(max(map(len, schedules))):
+        idx = np.array([i for i, schedule in enumerate(schedules)
+                        if j < len(schedule) and not messages[i]], dtype=int)
+        if idx.size == 0:
+            break
+        steps = [schedules[i][j] for i in idx]
+        for i, (leg, k) in zip(idx, steps):
+            if k == 1:   # a new leg starts from the committed strain and stress
+                stress_ctrl[i], end[i] = leg.stress_controlled, leg.end
+                eps0[i], sigma0[i] = points.eps[i], points.sigma[i]
+        f0 = np.array([(k - 1) / leg.steps for leg, k in steps])
+        f1 = np.array([k / leg.steps for leg, k in steps])
+        advance(idx, f0, f1, 0)
+        for i, (leg, _) in zip(idx, steps):
+            if not messages[i]:
+                rows[i].append(_row(points, i, len(rows[i]), leg.name, names[i]))
+    return [PointResult(rows[i], not messages[i], messages[i], int(points.iterations[i]),
+                        int(points.max_iterations[i]), int(cuts[i])) for i in range(len(paths))]
 
 
 def invariants(sigma, eps, signed=True):
@@ -236,13 +292,15 @@ def invariants(sigma, eps, signed=True):
             "sigma3": principal[2]}
 
 
-def _row(point, step, leg, path_name):
+def _row(points, i, step, leg, path_name):
+    """The output row of point ``i`` at its ``step``."""
     row = {"step": step, "leg": leg}
     row.update({k: float(v) + 0.0 for k, v in   # + 0.0: no -0 in the CSV
-                invariants(point.sigma, point.eps, signed=path_name != "simple-shear").items()})
-    for name, value in point.state.items():
-        if name != "stress" and value.shape == (1,):
-            row[name] = float(value[0]) + 0.0
+                invariants(points.sigma[i], points.eps[i],
+                           signed=path_name != "simple-shear").items()})
+    for name, value in points.state.items():
+        if name != "stress" and value.ndim == 1:   # the scalar history variables
+            row[name] = float(value[i]) + 0.0
     return row
 
 

@@ -36,18 +36,18 @@ class Leg:
     control: tuple
     end: tuple
 
-    def targets(self, eps0, sigma0, fraction):
-        """(6,) target at ``fraction`` of the leg: total strain (STRAIN components)
-        or stress (STRESS components), from the strain and stress at its start."""
-        end = np.asarray(self.end, dtype=float)
-        stress = self.stress_controlled
-        stress_end = np.where(np.isnan(end), sigma0, end)   # nan: held
-        return np.where(stress, sigma0 + fraction * (stress_end - sigma0),
-                        eps0 + fraction * np.where(stress, 0.0, end))
-
     @property
     def stress_controlled(self):
         return np.array([c == STRESS for c in self.control])
+
+
+def targets(stress_controlled, end, eps0, sigma0, fraction):
+    """Target at ``fraction`` of a leg: total strain on the strain-controlled components,
+    stress on the stress-controlled ones, from the strain and stress at the leg's start.
+    Every argument broadcasts: (6,) for one point, (n, 6) with (n, 1) fractions for n."""
+    stress_end = np.where(np.isnan(end), sigma0, end)   # nan: held
+    return np.where(stress_controlled, sigma0 + fraction * (stress_end - sigma0),
+                    eps0 + fraction * np.where(stress_controlled, 0.0, end))
 
 
 def _leg(name, steps, **components):
