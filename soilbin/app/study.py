@@ -3,10 +3,13 @@
 A study file names a scene, the overrides of every case (``[set]``), the
 cases (``[[case]]`` tables, a ``[product]`` of value lists, or both), the
 collected table and overlay figures. Every case is checked by loading its
-scene before anything runs. Each case is ``soilbin run SCENE --set ...`` in
-its own process and in its own folder, named after its overrides; a case
-whose folder holds the summary of an earlier run of exactly that case is not
-run again, so an interrupted study resumes where it stopped.
+scene before anything runs. A key ``materials.NAME.from = "FILE.toml[:NAME]"``
+replaces the scene's material NAME whole by a file's (the ``material.toml`` of
+``soilbin calibrate``, or a material of a scene file). Each case is
+``soilbin run SCENE --set ...`` in its own process and in its own folder, named
+after its overrides; a case whose folder holds the summary of an earlier run of
+exactly that case is not run again, so an interrupted study resumes where it
+stopped.
 """
 import csv
 import dataclasses
@@ -192,22 +195,108 @@ def folder_name(own, short):
     return f"{safe[:MAX_NAME - 9]}-{hashlib.sha1(text.encode()).hexdigest()[:8]}"
 
 
-def _override(key, value):
+def _override(key, value, base):
+    """The --set item of a study key; materials.NAME.from is the material read from its file,
+    as one table that replaces the scene's material NAME whole."""
+    material = _replaced_material(key)
     try:
+        if material is not None:
+            table = _material_from_file(key, value, base)
+            return f"materials.{material}={_inline_table(table)}"
         return f"{key}={toml_value(value)}"
     except TypeError:
         raise InputError(f"{key}: {value!r} cannot be given to --set") from None
 
 
-def _case(scene_path, common, own, short, case_label, named):
+def _inline_table(table):
+    """{model = "elastic", E = 9000.0}: a TOML inline table, a --set value."""
+    return "{" + ", ".join(f"{key} = {toml_value(value)}" for key, value in table.items()) + "}"
+
+
+FROM_ACCEPTED = ('"FILE.toml" (a file holding one [materials.NAME] table, such as the '
+                 'material.toml of soilbin calibrate) or "FILE.toml:NAME"; FILE relative to '
+                 'the study file\'s folder')
+
+
+def _replaced_material(key):
+    """NAME of a key materials.NAME.from (the whole material read from a file), else None."""
+    parts = key.split(".")
+    return parts[1] if len(parts) == 3 and parts[0] == "materials" and parts[2] == "from" else None
+
+
+def _material_from_file(key, spec, base):
+    """{model, parameters} of the material ``spec`` names: FILE.toml (its only material) or
+    FILE.toml:NAME, FILE relative to ``base``; the model and its parameters checked."""
+    from ..models import MODELS
+    from ..records.toml_in import read_scene_tables
+    where = f"{key} = {spec!r}"
+    if not isinstance(spec, str):
+        raise InputError(f"{where}: expected {FROM_ACCEPTED}")
+    file, sep, name = spec.rpartition(":")
+    if not sep:
+        file, name = spec, None
+    if not file or name == "":
+        raise InputError(f"{where}: expected {FROM_ACCEPTED}")
+    path = base / file
+    if not path.is_file():
+        raise InputError(f"{where}: no such file {path}; expected {FROM_ACCEPTED}")
+    try:
+        materials = read_scene_tables(path).get("materials")
+    except InputError as err:
+        raise InputError(f"{where}: {err}") from None
+    if not isinstance(materials, dict) or not materials:
+        raise InputError(f"{where}: {path} has no [materials.NAME] table; expected "
+                         f"{FROM_ACCEPTED}")
+    if name is None and len(materials) > 1:
+        raise InputError(f"{where}: {path} holds {len(materials)} materials "
+                         f"({', '.join(materials)}): name one as \"{file}:NAME\"")
+    name = name or next(iter(materials))
+    if not isinstance(materials.get(name), dict):
+        raise InputError(f"{where}: {path} has no material {name!r}; its materials: "
+                         f"{', '.join(materials)}")
+    parameters = dict(materials[name])
+    model = parameters.pop("model", None)
+    if not isinstance(model, str) or model not in MODELS:
+        raise InputError(f"{where}: {path}: materials.{name}.model = {model!r} is not a model "
+                         f"of soilbin; known: {', '.join(MODELS)}")
+    try:
+        from_table(MODELS[model], parameters, f"materials.{name}")
+    except InputError as err:
+        raise InputError(f"{where}: {path}: {err}") from None
+    return {"model": model, **parameters}
+
+
+def _check_replaced(values, scene):
+    """Each material a case reads from a file is one of the scene's regions'."""
+    used = dict.fromkeys(scene.regions.values())
+    for key in values:
+        material = _replaced_material(key)
+        if material is not None and material not in used:
+            raise InputError(f"{key}: no region of the scene has the material {material!r}; "
+                             f"its regions' materials: {', '.join(used)}")
+
+
+def _case_values(common, own):
+    """[set]'s values, then the case's own. A material the case reads from a file
+    (materials.NAME.from) is the file's: what [set] says of it is left out."""
+    replaced = tuple(f"materials.{name}." for name in map(_replaced_material, own) if name)
+    return {**{key: value for key, value in common.items() if not key.startswith(replaced)},
+            **own}
+
+
+def _case(scene_path, base, common, own, short, case_label, named):
+    """A case; a material read from a file (materials.NAME.from) is set before the other
+    keys, so that keys of its parameters beside it change the file's values."""
     from ..records.scene import load_scene
     name = folder_name(own, short)
-    values = {**common, **own}
-    overrides = tuple(_override(key, value) for key, value in values.items())
+    values = _case_values(common, own)
+    ordered = sorted(values.items(), key=lambda item: _replaced_material(item[0]) is None)
     try:
+        overrides = tuple(_override(key, value, base) for key, value in ordered)
         scene = load_scene(scene_path, overrides)
+        _check_replaced(values, scene)
     except InputError as err:
-        raise InputError(f"case {name}: {err}") from None
+        raise InputError(f"case {case_label or name}: {err}") from None
     return Case(name, overrides, values, scene, case_label, named)
 
 
@@ -262,7 +351,7 @@ def _parse(raw, path):
     own_values = _own_values(raw)
     swept = tuple(dict.fromkeys(key for own, _, _ in own_values for key in own))
     short = _short_names(swept)
-    cases = tuple(_case(scene_path, common, own, short, case_label, named)
+    cases = tuple(_case(scene_path, path.parent, common, own, short, case_label, named)
                   for own, case_label, named in own_values)
     names = [case.name for case in cases]
     twice = next((name for name in names if names.count(name) > 1), None)
@@ -502,6 +591,14 @@ study file (TOML; dotted keys are the keys of 'soilbin run --set'):
                                  [product]: each case with every combination)
     label = "..."                the case's name in the figures' legends and
                                  table.md (default: its values in words)
+  materials.NAME = {{ from = "FILE.toml" }}
+                                 in [set] or a [[case]]: the scene's material
+                                 NAME replaced whole by the one material of
+                                 FILE (soilbin calibrate's material.toml), or
+                                 "FILE.toml:MATERIAL", one of several; FILE
+                                 relative to the study file. Other keys of NAME
+                                 then change the file's values; a [product] of
+                                 materials.NAME.from = [...] sweeps files
   [run]
 {run}
   [table]
