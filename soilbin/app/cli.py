@@ -143,6 +143,9 @@ def _calibrate_parser(sub):
         epilog=CALIBRATE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     calibrate.add_argument("file", metavar="FILE.toml", type=Path, help="the calibration file")
     calibrate.add_argument("--out", type=Path, help="output folder (default: runs/calibrate-STEM)")
+    calibrate.add_argument("--jobs", type=int, default=os.cpu_count() or 1, metavar="N",
+                           help="processes for the fit's finite differences (default: the "
+                                "machine's cores, %(default)s here)")
     calibrate.add_argument("--json", action="store_true",
                            help="the last stdout line is the summary as one JSON object")
 
@@ -305,7 +308,9 @@ def _point(args):
 
 def _calibrate(args):
     from ..calibration.output import calibrate
-    summary = calibrate(args.file, args.out)
+    if args.jobs < 1:
+        raise InputError(f"--jobs {args.jobs}: accepted: a positive number of processes")
+    summary = calibrate(args.file, args.out, args.jobs)
     if args.json:
         print(json.dumps(summary))
     else:

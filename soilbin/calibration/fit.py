@@ -7,8 +7,11 @@ scaled by its measured range, so that stresses and strains weigh alike. All test
 one residual vector for ``scipy.optimize.least_squares`` (trust-region reflective,
 bounds). Columns are those of path.csv: compression positive.
 """
+import contextlib
 import dataclasses
+import multiprocessing
 import time
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -27,6 +30,9 @@ CORRELATION_MAX = 0.99
 #: Relative step of the Jacobian's finite differences: the model curves are converged to
 #: a relative 1e-10 (the driver's RTOL), so their derivatives to about 1e-4.
 DIFF_STEP = 1.0e-6
+#: The fit stops when the parameters are within about this many standard errors of the
+#: optimum (:func:`relative_ftol`): closer is below what the data say.
+FTOL_SE = 0.1
 #: The tests that fix a parameter, by its name (said next to an unidentified parameter).
 FIXED_BY = {
     "E": "the initial slope of a triaxial test (q against eps_axial)",
@@ -157,13 +163,16 @@ class Fit:
     nfev: int
     njev: int
     evaluations: int   # of every test's model curve: the fit's and its Jacobians'
+    jobs: int          # processes of the Jacobian's evaluations
     residuals: np.ndarray
     jacobian: np.ndarray
     wall_s: float
 
 
-def fit(calibration):
-    """Least squares from the start values within the bounds."""
+def fit(calibration, jobs=1):
+    """Least squares from the start values within the bounds; the Jacobian's columns
+    evaluated by ``jobs`` processes. The fit stops when the cost falls by less than a
+    change of FTOL_SE standard errors in the parameters would make it fall."""
     start = time.perf_counter()
     last = {"evaluations": 0}   # the residuals at the last trial: the base of its Jacobian
 
@@ -172,43 +181,61 @@ def fit(calibration):
         last["evaluations"] += 1
         return last["r"]
 
-    def jac(values):
-        r = last["r"] if np.array_equal(values, last.get("values")) else fun(values)
-        J, evaluations = jacobian(values, r, calibration)
-        last["evaluations"] += evaluations
-        return J
+    jobs = min(jobs, len(calibration.fitted))
+    with _trial_map(jobs) as trial_map:
+        def jac(values):
+            r = last["r"] if np.array_equal(values, last.get("values")) else fun(values)
+            J, evaluations = jacobian(values, r, calibration, trial_map)
+            last["evaluations"] += evaluations
+            return J
 
-    result = least_squares(fun, calibration.start, jac=jac, method="trf",
-                           bounds=(calibration.lower, calibration.upper), x_scale="jac",
-                           max_nfev=calibration.max_evaluations)
+        result = least_squares(fun, calibration.start, jac=jac, method="trf",
+                               bounds=(calibration.lower, calibration.upper), x_scale="jac",
+                               ftol=relative_ftol(calibration),
+                               max_nfev=calibration.max_evaluations)
     return Fit(result.x, result.status > 0, result.message, int(result.nfev),
-               int(result.njev or 0), last["evaluations"], result.fun, result.jac,
+               int(result.njev or 0), last["evaluations"], jobs, result.fun, result.jac,
                time.perf_counter() - start)
 
 
-def jacobian(values, r, calibration):
+def relative_ftol(calibration):
+    """ftol of least_squares (a relative fall of the cost F = r.r / 2): near the optimum a
+    change d of the parameters lowers F by F sum((d / se)^2) / (m - n), with m residuals, n
+    parameters and se their standard errors; F then falls by less than FTOL_SE^2 F / (m - n)
+    when the parameters are within about FTOL_SE standard errors of it."""
+    return FTOL_SE ** 2 / max(calibration.residual_count - len(calibration.fitted), 1)
+
+
+@contextlib.contextmanager
+def _trial_map(jobs):
+    """map(residuals at trial values) over ``jobs`` forked processes (in this one for 1)."""
+    if jobs <= 1:
+        yield lambda calibration, trials: [residuals(t, calibration) for t in trials]
+        return
+    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
+        yield lambda calibration, trials: list(pool.map(residuals, trials,
+                                                        [calibration] * len(trials)))
+
+
+def jacobian(values, r, calibration, trial_map):
     """Forward differences of the residuals ``r`` at ``values``, each step of DIFF_STEP
     times the parameter's size; backwards where the forward step leaves the bounds or a
     model curve fails there (a parameter on the edge of the set the model accepts, e.g.
     C = A of a cohesionless cap, whose curves cannot start beyond it). A column whose
-    curves fail on both sides is zero: the parameter is reported unidentified.
-    Returns (Jacobian, evaluations made)."""
-    columns, evaluations = [], 0
-    for i, value in enumerate(values):
-        h = DIFF_STEP * max(abs(value), abs(calibration.upper[i] - calibration.lower[i]) * 1e-3)
-        column = np.zeros(r.size)
-        for step in (h, -h):
-            if not calibration.lower[i] <= value + step <= calibration.upper[i]:
-                continue
-            trial = values.copy()
-            trial[i] += step
-            r_step = residuals(trial, calibration)
-            evaluations += 1
+    curves fail on both sides is zero: the parameter is reported unidentified. The
+    trials of each side go to ``trial_map`` together. Returns (Jacobian, evaluations)."""
+    h = DIFF_STEP * np.maximum(np.abs(values), 1e-3 * (calibration.upper - calibration.lower))
+    columns, todo, evaluations = np.zeros((r.size, values.size)), list(range(values.size)), 0
+    for sign in (1.0, -1.0):
+        tried = [i for i in todo
+                 if calibration.lower[i] <= values[i] + sign * h[i] <= calibration.upper[i]]
+        trials = [values + sign * h[i] * np.eye(values.size)[i] for i in tried]
+        for i, r_step in zip(tried, trial_map(calibration, trials)):
             if not np.any(r_step == FAILED_RESIDUAL):
-                column = (r_step - r) / step
-                break
-        columns.append(column)
-    return np.column_stack(columns), evaluations
+                columns[:, i] = (r_step - r) / (sign * h[i])
+                todo.remove(i)
+        evaluations += len(trials)
+    return columns, evaluations
 
 
 def residual_variance(r, n_parameters):

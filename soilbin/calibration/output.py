@@ -61,6 +61,7 @@ def summarize(calibration, result):
         "njev": result.njev,
         "evaluations": result.evaluations,
         "wall_s": round(result.wall_s, 3),
+        "jobs": result.jobs,
         "convention": CONVENTION,
         "residual_scale": "each compared column divided by its measured range, times the "
                           "test's weight",
@@ -119,14 +120,15 @@ def plot_test(calibration, test, measured, curve, path):
     plt.close(fig)
 
 
-def calibrate(file, out=None):
-    """Read, fit and write ``out`` (default runs/calibrate-<stem>); returns the summary."""
+def calibrate(file, out=None, jobs=1):
+    """Read, fit (the Jacobian by ``jobs`` processes) and write ``out`` (default
+    runs/calibrate-<stem>); returns the summary."""
     start = time.perf_counter()
     calibration = read_calibration(file)
     fitting.check_start(calibration)
     out = Path(out or Path("runs") / f"calibrate-{calibration.file.stem}")
     out.mkdir(parents=True, exist_ok=True)
-    result = fitting.fit(calibration)
+    result = fitting.fit(calibration, jobs)
     summary = summarize(calibration, result)
     rows = list(fitted_rows(calibration, result.values))
     write_material(calibration, result.values, out / "material.toml")

@@ -54,6 +54,11 @@ class Calibration:
     stress_unit: str   # from the file's ``units``, as a scene's (records.units)
     max_evaluations: int | None   # of the residual vector by the fit (None: scipy's 100 n)
 
+    @property
+    def residual_count(self):
+        """Measured values compared: the length of the residual vector."""
+        return sum(t.legs.size * len(t.y) for t in self.tests)
+
     def table(self, values):
         """The model's parameter table at the fitted ``values``."""
         return {**self.fixed, **{k: float(v) for k, v in zip(self.fitted, values)}}
@@ -87,7 +92,7 @@ def read_calibration(path):
     except InputError as err:
         raise InputError(f"{where}: at the start values: {err}") from None
     tests = _tests(doc.get("test"), path)
-    points = sum(t.measured[t.x].size * len(t.y) for t in tests)
+    points = sum(t.legs.size * len(t.y) for t in tests)
     if points < len(fitted):
         raise InputError(f"{where}: {points} measured values for {len(fitted)} fitted "
                          f"parameters; accepted: at least as many values as parameters")
