@@ -11,7 +11,8 @@ from soilbin.app.cli import main
 from soilbin.calibration.fit import FAILED_RESIDUAL, residuals
 from soilbin.calibration.output import calibrate
 from soilbin.calibration.problem import read_calibration
-from soilbin.material_point.driver import build_model, build_path, drive
+from soilbin.calibration.synthetic import laboratory_csv
+from soilbin.material_point.driver import build_model, build_path
 from soilbin.models import MODELS
 from soilbin.models.cap import SECTION_VII5
 from soilbin.params import from_table
@@ -26,14 +27,8 @@ NOISE = 0.01
 def synthetic_curve(model_name, table, path, settings, x, y, rng, leg):
     """The driver's rows of ``leg`` at the true parameters as a CSV text, with Gaussian
     noise of NOISE times each compared column's range."""
-    rows = drive(build_model(model_name, table), build_path(path, settings), path).rows
-    rows = [r for r in rows if r["leg"] == leg]
-    columns = {c: np.array([r[c] for r in rows]) for c in (x, *y)}
-    for c in y:
-        columns[c] = columns[c] + NOISE * np.ptp(columns[c]) * rng.standard_normal(len(rows))
-    lines = [",".join((x, *y))] + [",".join(f"{columns[c][k]:.12g}" for c in (x, *y))
-                                   for k in range(len(rows))]
-    return "\n".join(lines) + "\n"
+    return laboratory_csv(build_model(model_name, table), build_path(path, settings), path,
+                          x, y, (leg,), rng, NOISE)
 
 
 def toml_value(v):
@@ -106,6 +101,30 @@ def test_material_toml_read_back_by_the_scene_reader(tmp_path):
     model = from_table(MODELS[table.pop("model")], table, "materials.fit")
     assert model.c == summary["parameters"]["c"] and model.phi == summary["parameters"]["phi"]
     assert model.E == DP_FIXED["E"]
+
+
+def test_a_tied_parameter_takes_the_value_of_its_partner(tmp_path):
+    """psi tied to the fitted phi: associated flow at every trial, in material.toml too."""
+    path = dp_file(tmp_path)
+    path.write_text(path.read_text() + '[tied]\npsi = "phi"\n')
+    calibration = read_calibration(path)
+    assert calibration.model(np.array([2.0, 27.5])).psi == 27.5
+    summary = calibrate(path, tmp_path / "out")
+    assert_recovered(summary, DP_TRUTH)
+    assert summary["parameters"]["psi"] == summary["parameters"]["phi"]
+    assert summary["tied"] == {"psi": "phi"}
+
+
+@pytest.mark.parametrize("tied, words", [('psi = "chi"', ["tied.psi = 'chi'", "accepted", "phi"]),
+                                         ('nu = "phi"', ["'nu'", "[tied]", "[fixed]"])],
+                         ids=["unknown partner", "tied and fixed"])
+def test_bad_ties_are_refused(tmp_path, capsys, tied, words):
+    path = dp_file(tmp_path)
+    path.write_text(path.read_text() + f"[tied]\n{tied}\n")
+    assert main(["calibrate", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    for word in words:
+        assert word in err, (word, err)
 
 
 @pytest.mark.parametrize("units, stress", [(None, "psi"), ('"kN, m"', "kPa"),
@@ -226,12 +245,9 @@ def hydrostatic_with_unloading(table, rng, pressure=100.0):
     """(settings, csv text with a leg column) of a hydrostatic test loaded to ``pressure``
     and unloaded to the seating pressure: p is not monotone, each leg is."""
     settings = {"p_initial": SEATING, "pressure": pressure, "steps": 10}
-    rows = drive(build_model("modified_cap", table), build_path("hydrostatic", settings),
-                 "hydrostatic").rows[1:]
-    eps_v = np.array([r["eps_v"] for r in rows])
-    eps_v = eps_v + NOISE * np.ptp(eps_v) * rng.standard_normal(eps_v.size)
-    return settings, "leg,p,eps_v\n" + "".join(f"{r['leg']},{r['p']:.12g},{e:.12g}\n"
-                                               for r, e in zip(rows, eps_v))
+    return settings, laboratory_csv(build_model("modified_cap", table),
+                                    build_path("hydrostatic", settings), "hydrostatic", "p",
+                                    ("eps_v",), ("load", "unload"), rng, NOISE, leg_column=True)
 
 
 def test_a_leg_column_places_the_unloading_points_on_the_unloading_leg(tmp_path):

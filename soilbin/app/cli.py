@@ -115,6 +115,8 @@ the file (columns named as in path.csv of 'soilbin point', compression positive)
   E = 4000.0
   nu = 0.35
   matching = "compression_cone"
+  [tied]                           # optional: parameter = "the one whose value it takes"
+  psi = "phi"                      # (here: associated flow)
   [[test]]                         # one table per laboratory curve
   path = "triaxial-compression"    # a path of 'soilbin point'
   set = { confining = 5.0 }        # its path keys (path.KEY of 'soilbin point')

@@ -1,11 +1,13 @@
 """Least-squares fit of a model's parameters to laboratory curves, and what the fit
 says about them.
 
-Each test's model curve is the material-point driver's own (:func:`drive`) along the
-test's path; it is interpolated at the measured ``x`` and each compared column is
-scaled by its measured range, so that stresses and strains weigh alike. All tests form
-one residual vector for ``scipy.optimize.least_squares`` (trust-region reflective,
-bounds). Columns are those of path.csv: compression positive.
+Each test's model curve is the material-point driver's own along the test's path (the
+paths of one trial driven together, :func:`drive_all`); it is interpolated at the measured
+``x``, leg by leg, and each compared column is scaled by its measured range, so that
+stresses and strains weigh alike. All tests form one residual vector for
+``scipy.optimize.least_squares`` (trust-region reflective, bounds) with a forward-difference
+Jacobian (:func:`jacobian`) whose trials may run in several processes. Columns are those of
+path.csv: compression positive.
 """
 import contextlib
 import dataclasses
@@ -35,7 +37,7 @@ DIFF_STEP = 1.0e-6
 FTOL_SE = 0.1
 #: The tests that fix a parameter, by its name (said next to an unidentified parameter).
 FIXED_BY = {
-    "E": "the initial slope of a triaxial test (q against eps_axial)",
+    "E": "the slope of an unloading leg, or the elastic start of a triaxial test",
     "nu": "a triaxial test with its eps_v, or an oedometer test (with E)",
     "c": "triaxial tests at two or more confining pressures (q at failure)",
     "phi": "triaxial tests at two or more confining pressures (q at failure)",

@@ -49,6 +49,7 @@ def summarize(calibration, result):
         "material": material_name(calibration),
         "parameters": calibration.table(result.values),
         "fitted": list(names),
+        "tied": dict(calibration.tied),
         "standard_errors": {n: (float(e) if ok else None)
                             for n, e, ok in zip(names, errors, identified)},
         "correlation": {n: {m: round(float(corr[i, j]), 6) for j, m in enumerate(names)}

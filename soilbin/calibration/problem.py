@@ -19,7 +19,7 @@ from ..records.units import read_units
 
 #: Columns a test may compare or place its points at (path.csv's numeric columns).
 COLUMNS = tuple(c for c in BASE_COLUMNS if c not in ("step", "leg"))
-TOP_KEYS = ("model", "units", "max_evaluations", "fit", "fixed", "test")
+TOP_KEYS = ("model", "units", "max_evaluations", "fit", "fixed", "tied", "test")
 TEST_KEYS = ("path", "set", "data", "x", "y", "weight")
 
 
@@ -50,6 +50,7 @@ class Calibration:
     start: np.ndarray
     upper: np.ndarray
     fixed: dict
+    tied: dict         # parameter -> the fitted or fixed parameter whose value it takes
     tests: tuple
     stress_unit: str   # from the file's ``units``, as a scene's (records.units)
     max_evaluations: int | None   # of the residual vector by the fit (None: scipy's 100 n)
@@ -61,7 +62,8 @@ class Calibration:
 
     def table(self, values):
         """The model's parameter table at the fitted ``values``."""
-        return {**self.fixed, **{k: float(v) for k, v in zip(self.fitted, values)}}
+        table = {**self.fixed, **{k: float(v) for k, v in zip(self.fitted, values)}}
+        return {**table, **{k: table[v] for k, v in self.tied.items()}}
 
     def model(self, values):
         """The model record at ``values`` (InputError where the model refuses them)."""
@@ -85,12 +87,8 @@ def read_calibration(path):
     both = sorted(set(fitted) & set(fixed))
     if both:
         raise InputError(f"{where}: {both[0]!r} is both in [fit] and in [fixed]; give it in one")
-    _all_parameters(model_name, fitted, fixed, where)
-    lower, start, upper = bounds.T
-    try:
-        build_model(model_name, {**fixed, **dict(zip(fitted, start.tolist()))})
-    except InputError as err:
-        raise InputError(f"{where}: at the start values: {err}") from None
+    tied = _tied_table(doc.get("tied", {}), fitted, fixed, where)
+    _all_parameters(model_name, fitted, {**fixed, **tied}, where)
     tests = _tests(doc.get("test"), path)
     points = sum(t.legs.size * len(t.y) for t in tests)
     if points < len(fitted):
@@ -105,8 +103,14 @@ def read_calibration(path):
                                         or max_evaluations < 1):
         raise InputError(f"{where}: max_evaluations = {max_evaluations!r}; accepted: a "
                          f"positive integer")
-    return Calibration(path, model_name, tuple(fitted), lower, start, upper, dict(fixed),
-                       tests, read_units(units).stress, max_evaluations)
+    lower, start, upper = bounds.T
+    calibration = Calibration(path, model_name, tuple(fitted), lower, start, upper, dict(fixed),
+                              tied, tests, read_units(units).stress, max_evaluations)
+    try:
+        calibration.model(start)
+    except InputError as err:
+        raise InputError(f"{where}: at the start values: {err}") from None
+    return calibration
 
 
 def _known_keys(table, keys, where):
@@ -137,8 +141,21 @@ def _fit_table(fit, where):
     return list(fit), np.array(rows)
 
 
+def _tied_table(tied, fitted, fixed, where):
+    """{parameter: the fitted or fixed parameter it equals} of the [tied] table."""
+    if not isinstance(tied, dict):
+        raise InputError(f"{where}: [tied] must be a table of parameter = \"PARAMETER\"")
+    for name, other in tied.items():
+        if name in fitted or name in fixed:
+            raise InputError(f"{where}: {name!r} is in [tied] and in [fit] or [fixed]; give it in one")
+        if other not in fitted and other not in fixed:
+            raise InputError(f"{where}: tied.{name} = {other!r}; accepted: the name of a "
+                             f"parameter in [fit] or [fixed] ({', '.join([*fitted, *fixed])})")
+    return dict(tied)
+
+
 def _all_parameters(model_name, fitted, fixed, where):
-    """Every parameter the model needs is in [fit] or [fixed]; none is unknown."""
+    """Every parameter the model needs is in [fit] or [fixed] (or [tied]); none is unknown."""
     fields = {f.name: f for f in dataclasses.fields(MODELS[model_name]) if f.init}
     given = set(fitted) | set(fixed)
     unknown = sorted(given - set(fields))
