@@ -153,3 +153,20 @@ def test_two_ranks_resume_from_their_checkpoint(tmp_path):
         assert mine["resumed_after_step"] == 2 and mine["n_ranks"] == ranks
         assert mine["load_factor"] == theirs["load_factor"] == 1.0
         assert mine["draft_force_at"] == pytest.approx(theirs["draft_force_at"], rel=1e-6)
+
+
+def test_calibrate_shares_its_jacobian_over_two_ranks(tmp_path):
+    """Each rank evaluates its share of the finite-difference trials and all gather them:
+    the same fit as one process, to the last digit; rank 0 alone writes and prints."""
+    from test_calibrate import dp_file
+    path = dp_file(tmp_path)
+    summaries = {}
+    for ranks in (1, 2):
+        done = soilbin_cli("calibrate", path, "--out", tmp_path / f"n{ranks}", "--jobs", "1",
+                           "--json", mpi_ranks=ranks if ranks > 1 else None)
+        assert done.returncode == 0, done.stderr
+        assert len(done.stdout.strip().splitlines()) == 1
+        summaries[ranks] = last_json(done.stdout)
+    assert summaries[2]["jobs"] == 2 and summaries[1]["jobs"] == 1
+    for key in ("parameters", "standard_errors", "evaluations"):
+        assert summaries[2][key] == summaries[1][key]

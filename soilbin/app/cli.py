@@ -147,9 +147,25 @@ def _calibrate_parser(sub):
     calibrate.add_argument("--out", type=Path, help="output folder (default: runs/calibrate-STEM)")
     calibrate.add_argument("--jobs", type=int, default=os.cpu_count() or 1, metavar="N",
                            help="processes for the fit's finite differences (default: the "
-                                "machine's cores, %(default)s here)")
+                                "machine's cores, %(default)s here; under mpirun the ranks)")
     calibrate.add_argument("--json", action="store_true",
                            help="the last stdout line is the summary as one JSON object")
+
+
+def _print_calibration(summary, as_json):
+    if as_json:
+        print(json.dumps(summary))
+        return
+    errors = summary["standard_errors"]
+    for name in summary["fitted"]:
+        se = errors[name]
+        print(f"{name} = {summary['parameters'][name]:.6g} "
+              f"± {'unidentified' if se is None else f'{se:.3g}'}")
+    for name, reason in summary["unidentified"].items():
+        print(f"unidentified: {name}: {reason}")
+    print(f"{summary['status']}: rms {summary['rms']['overall']:.3g} (scaled), "
+          f"{summary['evaluations']} evaluations, {summary['wall_s']} s; results in "
+          f"{summary['out']}", file=sys.stderr)
 
 
 def _point_parser(sub, details=True):
@@ -313,19 +329,8 @@ def _calibrate(args):
     if args.jobs < 1:
         raise InputError(f"--jobs {args.jobs}: accepted: a positive number of processes")
     summary = calibrate(args.file, args.out, args.jobs)
-    if args.json:
-        print(json.dumps(summary))
-    else:
-        errors = summary["standard_errors"]
-        for name in summary["fitted"]:
-            se = errors[name]
-            print(f"{name} = {summary['parameters'][name]:.6g} "
-                  f"± {'unidentified' if se is None else f'{se:.3g}'}")
-        for name, reason in summary["unidentified"].items():
-            print(f"unidentified: {name}: {reason}")
-        print(f"{summary['status']}: rms {summary['rms']['overall']:.3g} (scaled), "
-              f"{summary['evaluations']} evaluations, {summary['wall_s']} s; results in "
-              f"{summary['out']}", file=sys.stderr)
+    if _rank0():
+        _print_calibration(summary, args.json)
     return 0 if summary["status"] == "converged" else 1
 
 

@@ -12,6 +12,7 @@ path.csv: compression positive.
 import contextlib
 import dataclasses
 import multiprocessing
+import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 
@@ -165,7 +166,7 @@ class Fit:
     nfev: int
     njev: int
     evaluations: int   # of every test's model curve: the fit's and its Jacobians'
-    jobs: int          # processes of the Jacobian's evaluations
+    jobs: int          # processes (or MPI ranks) of the Jacobian's evaluations
     residuals: np.ndarray
     jacobian: np.ndarray
     wall_s: float
@@ -173,7 +174,7 @@ class Fit:
 
 def fit(calibration, jobs=1):
     """Least squares from the start values within the bounds; the Jacobian's columns
-    evaluated by ``jobs`` processes. The fit stops when the cost falls by less than a
+    evaluated by ``jobs`` processes, or by the MPI ranks under an MPI launcher. The fit stops when the cost falls by less than a
     change of FTOL_SE standard errors in the parameters would make it fall."""
     start = time.perf_counter()
     last = {"evaluations": 0}   # the residuals at the last trial: the base of its Jacobian
@@ -183,7 +184,8 @@ def fit(calibration, jobs=1):
         last["evaluations"] += 1
         return last["r"]
 
-    jobs = min(jobs, len(calibration.fitted))
+    comm = mpi_world()
+    jobs = comm.size if comm is not None else min(jobs, len(calibration.fitted))
     with _trial_map(jobs) as trial_map:
         def jac(values):
             r = last["r"] if np.array_equal(values, last.get("values")) else fun(values)
@@ -208,15 +210,34 @@ def relative_ftol(calibration):
     return FTOL_SE ** 2 / max(calibration.residual_count - len(calibration.fitted), 1)
 
 
+def mpi_world():
+    """MPI.COMM_WORLD when an MPI launcher started more than one rank, else None (MPI is not
+    started otherwise: the fork of the processes of ``jobs`` would follow it)."""
+    size = os.environ.get("OMPI_COMM_WORLD_SIZE") or os.environ.get("PMI_SIZE")
+    if size is None or int(size) < 2:
+        return None
+    from mpi4py import MPI
+    return MPI.COMM_WORLD
+
+
 @contextlib.contextmanager
 def _trial_map(jobs):
-    """map(residuals at trial values) over ``jobs`` forked processes (in this one for 1)."""
-    if jobs <= 1:
+    """map(residuals at trial values): over the MPI ranks (each one's share, then gathered
+    by all: every rank goes on with the same Jacobian), over ``jobs`` forked processes, or
+    in this one."""
+    comm = mpi_world()
+    if comm is not None:
+        def over_ranks(calibration, trials):
+            mine = [residuals(t, calibration) for t in trials[comm.rank::comm.size]]
+            shares = comm.allgather(mine)
+            return [shares[k % comm.size][k // comm.size] for k in range(len(trials))]
+        yield over_ranks
+    elif jobs <= 1:
         yield lambda calibration, trials: [residuals(t, calibration) for t in trials]
-        return
-    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
-        yield lambda calibration, trials: list(pool.map(residuals, trials,
-                                                        [calibration] * len(trials)))
+    else:
+        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
+            yield lambda calibration, trials: list(pool.map(residuals, trials,
+                                                            [calibration] * len(trials)))
 
 
 def jacobian(values, r, calibration, trial_map):

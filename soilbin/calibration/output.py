@@ -122,23 +122,27 @@ def plot_test(calibration, test, measured, curve, path):
 
 
 def calibrate(file, out=None, jobs=1):
-    """Read, fit (the Jacobian by ``jobs`` processes) and write ``out`` (default
-    runs/calibrate-<stem>); returns the summary."""
+    """Read, fit (the Jacobian by ``jobs`` processes, or by the MPI ranks) and write ``out``
+    (default runs/calibrate-<stem>; rank 0 writes); returns the summary."""
     start = time.perf_counter()
     calibration = read_calibration(file)
     fitting.check_start(calibration)
     out = Path(out or Path("runs") / f"calibrate-{calibration.file.stem}")
-    out.mkdir(parents=True, exist_ok=True)
+    comm = fitting.mpi_world()
+    writer = comm is None or comm.rank == 0
+    if writer:
+        out.mkdir(parents=True, exist_ok=True)
     result = fitting.fit(calibration, jobs)
     summary = summarize(calibration, result)
-    rows = list(fitted_rows(calibration, result.values))
-    write_material(calibration, result.values, out / "material.toml")
-    write_fit_csv(rows, out / "fit.csv")
-    for test, measured, curve, _ in rows:
-        plot_test(calibration, test, measured, curve, out / f"fit-{test.name}.png")
     summary["files"] = (["summary.json", "material.toml", "fit.csv"]
                         + [f"fit-{t.name}.png" for t in calibration.tests])
     summary["out"] = str(out)
-    summary["total_wall_s"] = round(time.perf_counter() - start, 3)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    if writer:
+        rows = list(fitted_rows(calibration, result.values))
+        write_material(calibration, result.values, out / "material.toml")
+        write_fit_csv(rows, out / "fit.csv")
+        for test, measured, curve, _ in rows:
+            plot_test(calibration, test, measured, curve, out / f"fit-{test.name}.png")
+        summary["total_wall_s"] = round(time.perf_counter() - start, 3)
+        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
