@@ -131,6 +131,12 @@ correlation, unidentified parameters, rms per test, evaluations, wall_s),
 material.toml ([materials.NAME] to paste into a scene), fit.csv (measured
 against fitted at every point), fit-TEST.png (one per test).
 
+a study runs a scene in the fitted material with materials.NAME = { from =
+"runs/calibrate-STEM/material.toml" } (relative to the study file).
+
+example (the section VII.5 soil from its appendix C curves):
+  soilbin calibrate examples/calibration-vii5/vii5.toml
+
 exit status: 0 converged, 1 not converged (every output written), 2 bad input.
 """
 
