@@ -170,3 +170,13 @@ def test_calibrate_shares_its_jacobian_over_two_ranks(tmp_path):
     assert summaries[2]["jobs"] == 2 and summaries[1]["jobs"] == 1
     for key in ("parameters", "standard_errors", "evaluations"):
         assert summaries[2][key] == summaries[1][key]
+
+
+def test_point_under_two_ranks_writes_and_prints_once(tmp_path):
+    done = soilbin_cli("point", "elastic", "hydrostatic", "--set", "E=1e4", "--set", "nu=0.3",
+                       "--set", "path.pressure=10", "--out", tmp_path / "out", "--json",
+                       mpi_ranks=2)
+    assert done.returncode == 0, done.stderr
+    assert len(done.stdout.strip().splitlines()) == 1
+    assert last_json(done.stdout)["final"]["p"] == pytest.approx(0.0, abs=1e-9)
+    assert {p.name for p in (tmp_path / "out").iterdir()} == {"path.csv", "path.png", "summary.json"}

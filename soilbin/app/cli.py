@@ -303,6 +303,7 @@ def _run(args):
 
 def _point(args):
     from ..errors import InputError
+    from ..launcher import mpi_world
     from ..material_point.driver import material_table, run_point, split_overrides
 
     model_table, path_table = split_overrides(args.overrides)
@@ -316,8 +317,16 @@ def _point(args):
         scene, _, material_name = material.rpartition(":")
         name = f"{Path(scene).stem}-{material_name}"
     out = args.out or Path("runs") / f"point-{name}-{args.path}"
-    summary = run_point(model, model_table, args.path, path_table, out, material)
-    if args.json:
+    comm = mpi_world()   # under mpirun every rank drives the path, rank 0 writes and prints
+    summary = run_point(model, model_table, args.path, path_table,
+                        out if comm is None or comm.rank == 0 else None, material)
+    if _rank0():
+        _print_point(summary, out, args.json)
+    return 0 if summary["converged"] else 1
+
+
+def _print_point(summary, out, as_json):
+    if as_json:
         print(json.dumps(summary))
     else:
         print(f"{summary['status']}: {summary['n_steps']} steps, {summary['newton_iterations']} "
@@ -327,7 +336,6 @@ def _point(args):
               f"p = {final['p']:.6g}, q = {final['q']:.6g}, eps_v = {final['eps_v']:.6g}")
     if summary["message"]:
         print(f"soilbin: {summary['message']}", file=sys.stderr)
-    return 0 if summary["converged"] else 1
 
 
 def _calibrate(args):

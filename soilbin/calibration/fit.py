@@ -12,7 +12,6 @@ path.csv: compression positive.
 import contextlib
 import dataclasses
 import multiprocessing
-import os
 import time
 from concurrent.futures import ProcessPoolExecutor
 
@@ -20,6 +19,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..errors import ConvergenceError, InputError, ReturnMapError
+from ..launcher import mpi_world
 from ..material_point.driver import drive_all
 
 #: Scaled residual of every point of a test whose model curve cannot be computed at
@@ -208,16 +208,6 @@ def relative_ftol(calibration):
     parameters and se their standard errors; F then falls by less than FTOL_SE^2 F / (m - n)
     when the parameters are within about FTOL_SE standard errors of it."""
     return FTOL_SE ** 2 / max(calibration.residual_count - len(calibration.fitted), 1)
-
-
-def mpi_world():
-    """MPI.COMM_WORLD when an MPI launcher started more than one rank, else None (MPI is not
-    started otherwise: the fork of the processes of ``jobs`` would follow it)."""
-    size = os.environ.get("OMPI_COMM_WORLD_SIZE") or os.environ.get("PMI_SIZE")
-    if size is None or int(size) < 2:
-        return None
-    from mpi4py import MPI
-    return MPI.COMM_WORLD
 
 
 @contextlib.contextmanager

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..launcher import mpi_world
 from ..material_point.driver import CONVENTION
 from ..plotting import pyplot
 from ..records.toml_out import dumps
@@ -128,7 +129,7 @@ def calibrate(file, out=None, jobs=1):
     calibration = read_calibration(file)
     fitting.check_start(calibration)
     out = Path(out or Path("runs") / f"calibrate-{calibration.file.stem}")
-    comm = fitting.mpi_world()
+    comm = mpi_world()
     writer = comm is None or comm.rank == 0
     if writer:
         out.mkdir(parents=True, exist_ok=True)
