@@ -51,12 +51,14 @@ LOADS = (36.0, 72.0, 108.0)
 
 
 def write_data():
-    """The noisy curves, one CSV per test with its leg column."""
+    """The noisy curves, one CSV per test with its leg column; strains from the start of
+    shearing but in the hydrostatic test (as vii5.toml's strains_from says)."""
     rng = np.random.default_rng(SEED)
     model = build_model("modified_cap", dict(SECTION_VII5))
     for name, (path, keys, x, y) in TESTS.items():
         text = laboratory_csv(model, build_path(path, {**COMMON, **keys}), path, x, y,
-                              RECORDED, rng, NOISE, leg_column=True)
+                              RECORDED, rng, NOISE, leg_column=True,
+                              strains_from="" if path == "hydrostatic" else "shear")
         (EXAMPLE / f"{name}.csv").write_text(text)
 
 

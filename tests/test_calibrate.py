@@ -12,6 +12,7 @@ from soilbin.calibration.fit import FAILED_RESIDUAL, residuals
 from soilbin.calibration.output import calibrate
 from soilbin.calibration.problem import read_calibration
 from soilbin.calibration.synthetic import laboratory_csv
+from soilbin.errors import InputError
 from soilbin.material_point.driver import build_model, build_path
 from soilbin.models import MODELS
 from soilbin.models.cap import SECTION_VII5
@@ -338,3 +339,28 @@ def test_bad_leg_columns_are_refused(tmp_path, capsys, edit, words):
     err = capsys.readouterr().err
     for word in words:
         assert word in err, (word, err)
+
+
+def test_strains_counted_from_the_start_of_shearing(tmp_path):
+    """Laboratory triaxial strains start at zero when shearing starts: strains_from =
+    "shear" shifts the model's strain columns alike, and c, phi come back as before."""
+    rng = np.random.default_rng(1)
+    model = build_model("drucker_prager", {**DP_TRUTH, **DP_FIXED})
+    tests = []
+    for confining in CONFINING:
+        settings = {"confining": confining, "steps": STEPS}
+        text = laboratory_csv(model, build_path("triaxial-compression", settings),
+                              "triaxial-compression", "eps_axial", ("q", "eps_v"), ("shear",),
+                              rng, NOISE, strains_from="shear")
+        tests.append((f"tx{confining:g}.csv", text, {
+            "path": "triaxial-compression", "set": settings, "x": "eps_axial",
+            "y": ["q", "eps_v"], "strains_from": "shear"}))
+    assert tests[0][1].splitlines()[1].startswith("0.0025,")   # the first step's strain
+    path = write_calibration(tmp_path, "drucker_prager", {"c": [0.1, 1.0, 20.0],
+                                                          "phi": [5.0, 25.0, 50.0]},
+                             DP_FIXED, tests)
+    assert_recovered(calibrate(path, tmp_path / "out"), DP_TRUTH)
+    text = path.read_text().replace('strains_from = "shear"', 'strains_from = "shearing"', 1)
+    path.write_text(text)
+    with pytest.raises(InputError, match="strains_from = 'shearing'; accepted: a leg of the path: confine, shear"):
+        read_calibration(path)

@@ -125,6 +125,8 @@ the file (columns named as in path.csv of 'soilbin point', compression positive)
                                    # along each leg with a 'leg' column, as in path.csv)
   y = ["q", "eps_v"]               # the columns compared
   weight = 1.0                     # optional
+  strains_from = "shear"           # optional: strains count from this leg's start
+                                   # (default: from the path's start, p_initial)
 
 output (in --out): summary.json (status, parameters, standard_errors,
 correlation, unidentified parameters, rms per test, evaluations, wall_s),

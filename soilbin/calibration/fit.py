@@ -18,9 +18,10 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..errors import ConvergenceError, InputError, ReturnMapError
+from ..errors import InputError
 from ..launcher import mpi_world
 from ..material_point.driver import drive_all
+from .problem import strains_from_leg
 
 #: Scaled residual of every point of a test whose model curve cannot be computed at
 #: the trial parameters (the driver fails, or the model refuses them): large against
@@ -59,11 +60,6 @@ class CurveFailed(Exception):
     """The model curve of a test cannot be computed at the trial parameters."""
 
 
-#: What leaves a test without a model curve at trial parameters: the driver's failures and
-#: a parameter set the model refuses (e.g. psi > phi, lam <= kappa).
-CURVE_FAILURES = (CurveFailed, ConvergenceError, ReturnMapError, InputError)
-
-
 @dataclasses.dataclass(frozen=True)
 class Curve:
     """A test's model curve: the driver's rows along its path, each with its leg."""
@@ -84,16 +80,19 @@ def model_curves(model, tests):
     driver fails): all paths driven together (:func:`drive_all`)."""
     try:
         results = drive_all(model, [(t.path_params, t.path_name) for t in tests])
-    except CURVE_FAILURES as err:   # the model cannot start from a test's initial state
+    except InputError as err:   # the model cannot start from a test's initial state
         return [CurveFailed(str(err))] * len(tests)
     curves = []
     for test, result in zip(tests, results):
         if not result.converged:
             curves.append(CurveFailed(result.message))
             continue
-        table = np.array([[row[c] for c in (test.x, *test.y)] for row in result.rows])
-        curves.append(Curve(np.array([row["leg"] for row in result.rows]), table[:, 0],
-                            table[:, 1:]))
+        columns = (test.x, *test.y)
+        table = np.array([[row[c] for c in columns] for row in result.rows])
+        legs = np.array([row["leg"] for row in result.rows])
+        if test.strains_from:
+            table = strains_from_leg(table, columns, legs, test.strains_from)
+        curves.append(Curve(legs, table[:, 0], table[:, 1:]))
     return curves
 
 

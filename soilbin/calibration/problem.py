@@ -20,7 +20,17 @@ from ..records.units import read_units
 #: Columns a test may compare or place its points at (path.csv's numeric columns).
 COLUMNS = tuple(c for c in BASE_COLUMNS if c not in ("step", "leg"))
 TOP_KEYS = ("model", "units", "max_evaluations", "fit", "fixed", "tied", "test")
-TEST_KEYS = ("path", "set", "data", "x", "y", "weight")
+TEST_KEYS = ("path", "set", "data", "x", "y", "weight", "strains_from")
+#: The strain columns (shifted to zero at the start of a test's ``strains_from`` leg).
+STRAINS = ("eps_axial", "eps_v", "gamma")
+
+
+def strains_from_leg(table, columns, legs, leg):
+    """(n, len(columns)) ``table`` of a path's rows (their ``legs``) with its strain columns
+    counted from the start of ``leg`` (the last row before its first one), as a
+    laboratory counts a triaxial test's strains from the start of shearing."""
+    start = max(int(np.argmax(legs == leg)) - 1, 0)
+    return table - np.where(np.isin(columns, STRAINS), table[start], 0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -34,6 +44,7 @@ class LabTest:
     measured: dict     # column -> (n,) array, in the file's order
     legs: np.ndarray   # (n,) the path's leg of each point ('' without a leg column)
     weight: float
+    strains_from: str  # the leg at whose start the strains are zero ('': the path's start)
 
     @property
     def scale(self):
@@ -201,10 +212,14 @@ def _test(table, file, where):
     data = table.get("data")
     if not isinstance(data, str):
         raise InputError(f"{where}: data = {data!r}; accepted: a CSV file relative to {file}")
-    measured, legs = _read_curve(file.parent / data, x, y,
-                                 [leg.name for leg in path_params.legs()], where)
+    path_legs = [leg.name for leg in path_params.legs()]
+    strains_from = table.get("strains_from", "")
+    if strains_from and strains_from not in path_legs:
+        raise InputError(f"{where}: strains_from = {strains_from!r}; accepted: a leg of the "
+                         f"path: {', '.join(path_legs)}")
+    measured, legs = _read_curve(file.parent / data, x, y, path_legs, where)
     return LabTest(Path(data).stem, table["path"], path_params, x, tuple(y), measured, legs,
-                   float(weight))
+                   float(weight), strains_from)
 
 
 def _read_curve(csv_path, x, y, path_legs, where):

@@ -1,4 +1,4 @@
-"""Material-point driver: one point of a constitutive model along a loading path.
+"""Material-point driver: points of a constitutive model along loading paths.
 
 The same model classes as the finite element solve (:data:`soilbin.models.MODELS`)
 are driven along the paths of :mod:`soilbin.material_point.paths` under mixed control: at each
@@ -8,6 +8,8 @@ and the others are found by Newton's method on the residual
 the model's consistent tangent ``C[s, s]`` as the Jacobian. Every iteration
 updates from the committed state, as the global solve does. A step whose
 iteration does not converge (or whose return map fails) is cut in halves.
+Several paths are driven together (:func:`drive_all`), each at its own point, all
+points updated in one vectorised call a step.
 
 Output (compression positive, the geomechanics convention): p = -tr(sigma)/3,
 q = sqrt(3 J2) (negative when the axial stress is the smaller, as in triaxial
@@ -25,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConvergenceError, InputError, ReturnMapError
+from ..errors import InputError, ReturnMapError
 from ..models import MODELS
 from ..params import from_table
 from ..plotting import pyplot
@@ -45,10 +47,6 @@ CONVENTION = ("compression positive: p = -tr(sigma)/3, eps_v = -tr(eps), eps_axi
               "tau = sigma_xz")
 BASE_COLUMNS = ("step", "leg", "eps_axial", "eps_v", "gamma", "p", "q", "sigma_axial",
                 "sigma_lateral", "tau", "sigma1", "sigma2", "sigma3")
-
-
-class _NotConverged(Exception):
-    """A step failed; the driver cuts it."""
 
 
 # --------------------------------------------------------------------------- input

@@ -219,11 +219,17 @@ class Analysis(Params):
             raise InputError(f"frame_rotation = {list(self.frame_rotation)!r}: expected 3 numbers")
 
 
+#: The smallest residual tolerance: an assembled residual's rounding is about 1e-16 of its
+#: largest terms times their number, so a Newton tolerance below this is never met and
+#: every step would be cut.
+RESIDUAL_FLOOR = 1e-14
+
+
 @dataclasses.dataclass(frozen=True)
 class Solver(Params):
-    rtol: float = param(1e-9, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
+    rtol: float = param(1e-9, lo=RESIDUAL_FLOOR, hi=1.0, hi_open=True,
                         doc="residual reduction that ends Newton in a step")
-    atol: float = param(1e-10, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
+    atol: float = param(1e-10, lo=RESIDUAL_FLOOR, hi=1.0, hi_open=True,
                         doc="residual floor relative to the run's force scale")
     max_iterations: int = param(25, lo=1, hi=200, doc="Newton iterations before the step is cut")
     line_search: LineSearch = param(LineSearch.BACKTRACKING,
