@@ -32,6 +32,11 @@ TESTS = {
     "triaxial-extension": ["path.confining=10"],
     "simple-shear": ["path.confining=10"],
 }
+#: Each path's name in the legends.
+NAMES = {"hydrostatic": "hydrostatic, to 30 psi and back",
+         "triaxial-compression": "triaxial compression (CTC), 10 psi",
+         "triaxial-extension": "triaxial extension (CTE), 10 psi",
+         "simple-shear": "simple shear, 10 psi"}
 
 
 def run(path, settings):
@@ -54,19 +59,20 @@ def main():
     fig, (paths, curves) = plt.subplots(1, 2, figsize=(11, 4.2))
     for name, settings in TESTS.items():
         rows = run(name, settings)
-        paths.plot([r["p"] for r in rows], [r["q"] for r in rows], ".-", ms=2, label=name)
+        paths.plot([r["p"] for r in rows], [r["q"] for r in rows], ".-", ms=2, label=NAMES[name])
         if name == "hydrostatic":
             curves.plot([r["eps_v"] for r in rows], [r["p"] for r in rows], ".-", ms=2,
-                        label="hydrostatic: p against eps_v")
+                        label="hydrostatic: mean stress p against volumetric strain ε_v")
         elif name == "simple-shear":
             curves.plot([r["gamma"] for r in rows], [r["tau"] for r in rows], ".-", ms=2,
-                        label="simple shear: tau against gamma")
+                        label="simple shear: shear stress τ against shear strain γ")
         else:
+            kind = "CTC" if name == "triaxial-compression" else "CTE"
             curves.plot([r["eps_axial"] for r in rows], [r["q"] for r in rows], ".-", ms=2,
-                        label=f"{name}: q against eps_axial")
-    paths.set_xlabel("p [psi] (compression +)")
-    paths.set_ylabel("q [psi] (negative in extension)")
-    curves.set_xlabel("strain (compression +)")
+                        label=f"{kind}: deviatoric stress q against axial strain ε_a")
+    paths.set_xlabel("mean stress p [psi] (compression +)")
+    paths.set_ylabel("deviatoric stress q [psi] (negative in extension)")
+    curves.set_xlabel("strain [-] (compression +)")
     curves.set_ylabel("stress [psi]")
     for ax in (paths, curves):
         ax.grid(alpha=0.3)

@@ -107,9 +107,10 @@ def at_measured(test, curve):
         if np.all(np.diff(x) <= 0):   # an unloading leg: x decreases
             x, columns = x[::-1], columns[::-1]
         if x.size < 2 or np.any(np.diff(x) < 0):
-            raise CurveFailed(f"{test.x} of the model curve is not monotone along "
-                              f"{f'leg {leg!r}' if leg else 'the path'}; give the data a "
-                              f"'leg' column naming each row's leg of the path")
+            raise CurveFailed(f"{test.x} of the model curve is not monotone along leg {leg!r}"
+                              if leg else
+                              f"{test.x} of the model curve is not monotone along the path; "
+                              f"give the data a 'leg' column naming each row's leg of it")
         at = test.measured[test.x][test.legs == leg]
         fitted[test.legs == leg] = np.column_stack([np.interp(at, x, columns[:, j])
                                                     for j in range(columns.shape[1])])

@@ -116,7 +116,8 @@ def plot_test(calibration, test, measured, curve, path):
         ax.set_ylabel(axis_label(column, calibration.stress_unit))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(f"{test.name}: {test.path_name} (compression positive)", fontsize=9)
+    title = test.name if test.name == test.path_name else f"{test.name}: {test.path_name}"
+    fig.suptitle(f"{title} (compression positive)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
