@@ -13,7 +13,7 @@ midpoint strain rotated back by the half-step rotation,
 Δε̂ = R½ᵀ Δε̄ R½, R½ = (I − W/4)⁻¹ (I + W/4), and σ_{n+1} = R σ̂ Rᵀ; for an
 isotropic law this is σ_{n+1} = R σ_n Rᵀ + Q Δσ Qᵀ with Q = R R½ᵀ, which is the
 half-step rotation to second order (both Cayley rotations are exponentials to
-O(|W|³), so R½² = R + O(|W|³)): second-order accurate (rotating Δε by the whole R
+O(‖W‖³), so R½² = R + O(‖W‖³)): second-order accurate (rotating Δε by the whole R
 instead makes it first order). For a rigid increment Δε = 0 and R is the
 rotation itself, exactly.
 
