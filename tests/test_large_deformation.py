@@ -29,6 +29,8 @@ def test_column_follows_log_strain_to_30_percent(solve, E, nu):
     for row in rows:
         assert row["pressure"] == pytest.approx(M * math.log(L / (L - row["displacement"])), rel=5e-3)
     assert summary["top_settlement"] == pytest.approx(rows[-1]["displacement"], rel=1e-9)
+    # uniaxial strain keeps every angle of the mesh right: the scaled Jacobian stays 1
+    assert all(row["mesh_quality"] == pytest.approx(1.0, abs=1e-12) for row in rows)
 
 
 def test_small_deformation_column_stays_linear(solve):
@@ -166,6 +168,10 @@ def test_simple_shear_follows_the_jaumann_closed_form(tmp_path):
     assert sigma[0, 0, 2] == pytest.approx(G * math.sin(1.0), rel=0.01)
     assert sigma[0, 0, 0] == pytest.approx(G * (1 - math.cos(1.0)), rel=0.01)
     assert sigma[0, 2, 2] == pytest.approx(-G * (1 - math.cos(1.0)), rel=0.01)
+    # the sheared cells' corners: sin of the angle between the edges, 1 / sqrt(1 + γ²)
+    assert problem.quality.minimum() == pytest.approx(1 / math.sqrt(2.0), rel=1e-9)
+    assert [row.columns["mesh_quality"] for row in rows[9::10]] == pytest.approx(
+        [1 / math.sqrt(1 + row.load_factor**2) for row in rows[9::10]], rel=1e-9)
 
 
 @pytest.mark.slow

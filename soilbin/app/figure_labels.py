@@ -14,6 +14,7 @@ COLUMNS = {
     "pressure": ("pressure", "stress"),
     "lift": ("lift", "force"),
     "front_volumetric_strain": ("volumetric strain in front of the tool", None),
+    "mesh_quality": ("least scaled Jacobian of the mesh", None),
     "newton_iterations": ("Newton iterations", None),
     "cuts": ("step cuts", None),
     "wall_s": ("wall time", "time"),

@@ -23,8 +23,8 @@ from .xdmf import XdmfSeries
 #: (a loaded boundary: pressure; a tool: lift and the soil's volume change ahead of it)
 #: and Newton's effort.
 CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure", "lift",
-                 "front_volumetric_strain", "newton_iterations", "cuts", "wall_s")
-OBSERVED = ("pressure", "lift", "front_volumetric_strain")
+                 "front_volumetric_strain", "mesh_quality", "newton_iterations", "cuts", "wall_s")
+OBSERVED = ("pressure", "lift", "front_volumetric_strain", "mesh_quality")
 
 
 def curve_columns(problem):

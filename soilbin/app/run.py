@@ -19,6 +19,22 @@ from .outdir import prepare_on_rank0
 from .output import RunFolder
 
 
+
+def folded_at_step(records):
+    """The first step after which a cell of the moving mesh had folded over, or None."""
+    return next((r.step for r in records if r.columns.get("mesh_quality", 1.0) <= 0.0), None)
+
+
+def mesh_quality_results(records):
+    """The least scaled Jacobian of the mesh over the steps (the mesh moves in large
+    deformation, :mod:`soilbin.problem.mesh_quality`) and the step where a cell first
+    folded over; nothing when the mesh does not move."""
+    qualities = [r.columns["mesh_quality"] for r in records if "mesh_quality" in r.columns]
+    if not qualities:
+        return {}
+    return {"mesh_quality": min(qualities), "folded_at_step": folded_at_step(records)}
+
+
 def headline_results(scene, records):
     """The scene's headline values, read off the converged steps (the pressure: the curve's,
     over the loaded boundary's current area)."""
@@ -134,6 +150,11 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     def on_step(record):
         folder.add_step(record)
         checkpoints.write(folder.records)
+        if comm.rank == 0 and record.step == folded_at_step(folder.records):
+            print(f"soilbin: warning: step {record.step}: a cell of the mesh has folded over "
+                  f"(least scaled Jacobian {record.columns['mesh_quality']:.3g}); the results "
+                  f"from here on are not to be trusted: refine the mesh where it distorts",
+                  file=sys.stderr)
         if sections and any(abs(record.load_factor - s) < 1e-9 for s in stops):
             load = record.load_factor * scene.loading.magnitude
             section_figures.sections_png(problem, scene, load, out_dir / f"sections-{load:g}.png")
@@ -182,6 +203,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
         "wall_s": round(time.perf_counter() - start, 3),
         "cpu_s": round(time.process_time() - start_cpu, 3),
         **headline_results(scene, records),
+        **mesh_quality_results(records),
     }
     try:
         estimates = draft_estimates(scene)

@@ -9,6 +9,8 @@ loads (``loads``: supports, the driven boundary, dead loads, gravity, the
 in-situ state) and the tool (``tool``). Outputs read named fields
 (:meth:`SoilProblem.output_fields`), not the parts.
 """
+import dataclasses
+
 import numpy as np
 import ufl
 from dolfinx import fem
@@ -22,6 +24,7 @@ from . import fields
 from .frame import Frame
 from .kinematics import kinematics_of
 from .loads import BoundaryLoad, Supports, dead_loads, start_mean_pressure, vector_norm
+from .mesh_quality import MeshQuality
 from .tool import RigidTool
 
 
@@ -36,6 +39,7 @@ class SoilProblem:
         self.w = fem.Function(disc.space, name="solution")
         self.w_committed = fem.Function(disc.space)
         self.kinematics = kinematics_of(scene.analysis, disc, self.w, self.w_committed)
+        self.quality = MeshQuality(mesh) if self.kinematics.moves_mesh else None
         self.points = self._material_points()
         if scene.geostatic is not None and disc.element.mixed:
             start_mean_pressure(disc, self.points, self.w, self.w_committed)
@@ -113,7 +117,7 @@ class SoilProblem:
     @property
     def curve_columns(self):
         """Names of the values each observation carries beside displacement and force."""
-        return self.drive.columns
+        return self.drive.columns + ("mesh_quality",) * (self.quality is not None)
 
     def update_material_state(self):
         """The constitutive and interface updates of one Newton iterate."""
@@ -157,8 +161,13 @@ class SoilProblem:
 
     def observe(self):
         """Displacement and force of the driven boundary or tool along the loading direction,
-        and its further values (:attr:`curve_columns`)."""
-        return self.drive.observe()
+        and its further values (:attr:`curve_columns`): the mesh's least scaled Jacobian
+        too when the mesh moves; collective."""
+        observation = self.drive.observe()
+        if self.quality is None:
+            return observation
+        return dataclasses.replace(observation, columns={**observation.columns,
+                                                         "mesh_quality": self.quality.minimum()})
 
     # -- checkpoints ------------------------------------------------------------------
     def _stateful_parts(self):
