@@ -108,13 +108,13 @@ def run_case(scene_name, overrides):
     start = time.process_time()
     from mpi4py import MPI
     from soilbin.app.collapse import collapse_limit
-    from soilbin.meshes import BUILDERS
+    from soilbin.meshes import scene_mesh
     from soilbin.problem import SoilProblem
     from soilbin.records.scene import load_scene
     from soilbin.solver.stepping import run_load_steps
 
     scene = load_scene(ROOT / "scenes" / f"{scene_name}.toml", overrides)
-    problem = SoilProblem(scene, BUILDERS[scene.mesh_builder].build(scene.mesh, MPI.COMM_WORLD))
+    problem = SoilProblem(scene, scene_mesh(scene, MPI.COMM_WORLD))
     setup = time.process_time() - start
     result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None,
                             limit=collapse_limit(scene), first_cuts=scene.loading.first_cuts)

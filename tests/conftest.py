@@ -42,13 +42,13 @@ def last_json(stdout):
 def make_problem(scene, *overrides):
     """A SoilProblem for a scene (name in scenes/ or a path) with --set style overrides."""
     from mpi4py import MPI
-    from soilbin.meshes import BUILDERS
+    from soilbin.meshes import scene_mesh
     from soilbin.problem import SoilProblem
     from soilbin.records.scene import load_scene
 
     path = Path(scene) if str(scene).endswith(".toml") else SCENES / f"{scene}.toml"
     loaded = load_scene(path, overrides)
-    return SoilProblem(loaded, BUILDERS[loaded.mesh_builder].build(loaded.mesh, MPI.COMM_WORLD))
+    return SoilProblem(loaded, scene_mesh(loaded, MPI.COMM_WORLD))
 
 
 def jacobian_error(problem, seed=0, amplitude=0.01):

@@ -29,6 +29,36 @@ def test_right_angled_cells_are_one_and_a_shear_gives_the_sine_of_the_angle(dim)
     assert quality.minimum() == pytest.approx(1 / math.sqrt(1 + 0.75**2), rel=1e-12)
 
 
+def test_a_regular_simplex_is_one_and_the_split_cube_its_closed_form():
+    """Verdict's normalisation: the equilateral triangle and the regular tetrahedron have
+    1; the right triangles of a split square 1/√2 · 2/√3 (the corner between the
+    hypotenuse and a leg: sin 45° over sin 60°); a cube split into six tetrahedra (each
+    with edges 1, √2, √3 from a corner) √2 / √6 = 1/√3; a shear of either folds nothing."""
+    triangle = dmesh.create_mesh(MPI.COMM_WORLD, np.array([[0, 1, 2]], dtype=np.int64),
+                                 np.array([[0.0, 0.0], [1.0, 0.0], [0.5, np.sqrt(3) / 2]]),
+                                 ufl_mesh(2))
+    assert MeshQuality(triangle).minimum() == pytest.approx(1.0, rel=1e-12)
+    regular = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], dtype=float)
+    tetrahedron = dmesh.create_mesh(MPI.COMM_WORLD, np.array([[0, 1, 2, 3]], dtype=np.int64),
+                                    regular, ufl_mesh(3))
+    assert MeshQuality(tetrahedron).minimum() == pytest.approx(1.0, rel=1e-12)
+    square = dmesh.create_rectangle(MPI.COMM_WORLD, [[0, 0], [1, 1]], [2, 2],
+                                    dmesh.CellType.triangle)
+    assert MeshQuality(square).minimum() == pytest.approx(math.sqrt(0.5) * 2 / math.sqrt(3),
+                                                          rel=1e-12)
+    cube = dmesh.create_unit_cube(MPI.COMM_WORLD, 2, 2, 2, dmesh.CellType.tetrahedron)
+    quality = MeshQuality(cube)
+    assert np.allclose(quality.cells(), 1 / math.sqrt(3), rtol=1e-12)
+    cube.geometry.x[:, 0] += 0.2 * cube.geometry.x[:, 2]
+    assert 0.0 < quality.minimum() < 1 / math.sqrt(3)
+
+
+def ufl_mesh(dim):
+    import ufl
+    cell = "tetrahedron" if dim == 3 else "triangle"
+    return ufl.Mesh(ufl.VectorElement("Lagrange", cell, 1, dim=dim))
+
+
 def test_a_folded_cell_is_negative_and_a_mirrored_mesh_keeps_its_quality():
     mesh = box(3)
     quality = MeshQuality(mesh)

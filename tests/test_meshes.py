@@ -267,7 +267,7 @@ def test_non_hexahedra_are_refused_and_gmsh_is_finalized(monkeypatch):
         gmsh.model.occ.synchronize()
         return {"soil": entities_within(3)}, {}
 
-    message = "only 8-node hexahedra" if COMM.rank == 0 else "failed to mesh 'tetrahedra' on rank 0"
+    message = "needs 8-node hexahedra only" if COMM.rank == 0 else "failed to mesh 'tetrahedra' on rank 0"
     with pytest.raises(RuntimeError, match=message):
         build_tagged_mesh(COMM, "tetrahedra", tetrahedra, regions=("soil",), boundaries=())
     assert len(calls) == 1

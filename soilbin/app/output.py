@@ -25,6 +25,9 @@ from .xdmf import XdmfSeries
 CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure", "lift",
                  "front_volumetric_strain", "mesh_quality", "newton_iterations", "cuts", "wall_s")
 OBSERVED = ("pressure", "lift", "front_volumetric_strain", "mesh_quality")
+#: The XDMF topology of each cell the soil's meshes and the tool's faces are made of.
+XDMF_CELLS = {CellType.hexahedron: "Hexahedron", CellType.quadrilateral: "Quadrilateral",
+              CellType.tetrahedron: "Tetrahedron", CellType.triangle: "Triangle"}
 
 
 def curve_columns(problem):
@@ -54,8 +57,8 @@ def _gather(comm, array):
 
 class MeshData:
     """The soil mesh as one process writes it: the nodes of the P1 displacement space in
-    global order and in the scene's three coordinates, the hexahedra or quadrilaterals (VTK
-    node order, :attr:`topology`), and any field's node or cell values (a vector of a
+    global order and in the scene's three coordinates, its cells (VTK node order, their XDMF
+    :attr:`topology`), and any field's node or cell values (a vector of a
     two-dimensional mesh with its y component 0)."""
 
     def __init__(self, point_space):
@@ -68,8 +71,8 @@ class MeshData:
         self._cell_nodes = point_space.dofmap.list.array.reshape(
             -1, point_space.dofmap.cell_dofs(0).size)
         cells = imap.local_to_global(self._cell_nodes[:self._n_cells].ravel())
-        cell_type, self.topology = ((CellType.hexahedron, "Hexahedron") if self._dim == 3
-                                    else (CellType.quadrilateral, "Quadrilateral"))
+        cell_type = mesh.topology.cell_type
+        self.topology = XDMF_CELLS[cell_type]
         perm = perm_vtk(cell_type, self._cell_nodes.shape[1])
         x = point_space.tabulate_dof_coordinates()[:self._owned, :self._dim]
         self.points = _gather(self.comm, x @ embedding(self._dim).T)
@@ -96,7 +99,7 @@ class MeshData:
 
 def tool_surface(problem):
     """(points, cells, XDMF topology) of the faces the tool acts on, initial geometry, in
-    the scene's three coordinates: quadrilaterals, or the segments of a 2D mesh."""
+    the scene's three coordinates: quadrilaterals or triangles, or the segments of a 2D mesh."""
     mesh, tagged = problem.mesh, problem.tagged
     dim = mesh.topology.dim - 1
     owned = mesh.topology.index_map(dim).size_local
@@ -110,8 +113,10 @@ def tool_surface(problem):
         return None, None, None
     if dim == 1:
         return corners, np.arange(len(corners)).reshape(-1, 2), "Polyline"
-    quads = np.arange(len(corners)).reshape(-1, 4)[:, perm_vtk(CellType.quadrilateral, 4)]
-    return corners, quads, "Quadrilateral"
+    face = (CellType.quadrilateral if mesh.topology.cell_type is CellType.hexahedron
+            else CellType.triangle)
+    n = nodes.shape[1]
+    return corners, np.arange(len(corners)).reshape(-1, n)[:, perm_vtk(face, n)], XDMF_CELLS[face]
 
 
 class FieldWriter:

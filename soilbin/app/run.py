@@ -8,7 +8,7 @@ from mpi4py import MPI
 
 from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
 from ..errors import InputError
-from ..meshes import BUILDERS
+from ..meshes import scene_mesh
 from ..problem import SoilProblem
 from ..records.scene import Headline
 from ..solver.stepping import StepperResult, run_load_steps
@@ -133,7 +133,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     earlier = checkpoint.read(resume, scene) if resume is not None else None
     out_dir = prepare_on_rank0(comm, out_dir)
     with interrupt.kept():
-        tagged = BUILDERS[scene.mesh_builder].build(scene.mesh, comm)
+        tagged = scene_mesh(scene, comm)
     check_initial_stress(scene, tagged)
     problem = SoilProblem(scene, tagged)
     problem.newton.on_iterate = iterate_progress

@@ -47,8 +47,9 @@ class Discretisation:
         if not element.mixed:
             space = fem.FunctionSpace(mesh, ve)
             return cls(element, space, space, basis)
-        # P0 with trilinear, P1-disc (family "DPC") with triquadratic bricks
-        pe = (ufl.FiniteElement("DG", cell, 0) if element.degree == 1
+        # P0 with trilinear bricks and on simplices, P1-disc (family "DPC") with triquadratic
+        # bricks
+        pe = (ufl.FiniteElement("DG", cell, 0) if element.cell_dilatation
               else ufl.FiniteElement("DPC", cell, 1))
         space = fem.FunctionSpace(mesh, ufl.MixedElement([ve, pe, pe]))
         return cls(element, space, space.sub(0), basis)

@@ -16,10 +16,13 @@ Mapping = Callable[[float, float, float], tuple[float, float, float]]
 
 def block_grid(xs: Sequence[Segment], ys: Sequence[Segment], zs: Sequence[Segment],
                keep: Callable[[int, int, int], bool] = lambda i, j, k: True,
-               mapping: Mapping = lambda x, y, z: (x, y, z), dimension: int = 3) -> None:
+               mapping: Mapping = lambda x, y, z: (x, y, z), dimension: int = 3,
+               simplices: bool = False) -> None:
     """Transfinite hexahedral blocks: the products of the x, y and z segments (each sequence
     contiguous and ascending) whose indices (i, j, k) ``keep`` accepts; with ``dimension``
-    = 2 only each block's face at its low y, a transfinite quadrilateral surface.
+    = 2 only each block's face at its low y, a transfinite quadrilateral surface. With
+    ``simplices`` the faces are not recombined: gmsh splits each hexahedron of the grid into
+    six tetrahedra (each quadrilateral into two triangles), on the same nodes.
 
     ``mapping`` moves the block corners; the blocks' faces must stay planar
     (e.g. a map bilinear in each block). Synchronizes the model.
@@ -52,7 +55,8 @@ def block_grid(xs: Sequence[Segment], ys: Sequence[Segment], zs: Sequence[Segmen
             loop = [line(corner, a), line(shift(corner, a), b), -line(shift(corner, b), a), -line(corner, b)]
             tag = geo.addPlaneSurface([geo.addCurveLoop(loop)])
             geo.mesh.setTransfiniteSurface(tag)
-            geo.mesh.setRecombine(2, tag)
+            if not simplices:
+                geo.mesh.setRecombine(2, tag)
             faces[corner, normal] = tag
         return faces[corner, normal]
 
@@ -67,15 +71,16 @@ def block_grid(xs: Sequence[Segment], ys: Sequence[Segment], zs: Sequence[Segmen
 
 
 def extruded_grid(xs: Sequence[Segment], zs: Sequence[Segment], thickness: float, layers: int,
-                  dimension: int = 3) -> None:
+                  dimension: int = 3, simplices: bool = False) -> None:
     """Blocks of transfinite quads on the x-z plane, extruded to y = thickness in hexahedra
-    (``dimension`` = 2: not extruded).
+    (``dimension`` = 2: not extruded; ``simplices``: split, as :func:`block_grid`).
 
     The blocks are the products of the x segments ``xs`` and the z segments
     ``zs`` (each sequence contiguous and ascending); ``layers`` elements span
     the thickness. Synchronizes the model.
     """
-    block_grid(xs, [Segment(0.0, thickness, layers)], zs, dimension=dimension)
+    block_grid(xs, [Segment(0.0, thickness, layers)], zs, dimension=dimension,
+               simplices=simplices)
 
 
 Limit = Union[None, float, tuple[float, float]]

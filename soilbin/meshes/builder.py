@@ -3,7 +3,8 @@
 A builder declares, in one place, its parameter record, the cell groups
 (regions) and facet groups (boundaries) of every mesh it makes, which of the
 boundaries are the contact surface of a rigid tool, and the module whose
-``geometry(params)`` builds the gmsh model. That module is imported only
+``geometry(params, simplices)`` builds the gmsh model (of hexahedra, or of
+tetrahedra where ``simplices``, as the scene's element needs). That module is imported only
 when a mesh is built, so a scene can be read without gmsh; building checks
 that the geometry made exactly the declared groups, none of them empty. A
 plane-strain builder may also make a two-dimensional mesh in the x-z plane
@@ -31,7 +32,8 @@ class Builder:
     regions: tuple[str, ...]     # cell groups of every mesh it builds
     boundaries: tuple[str, ...]  # facet groups of every mesh it builds
     contact: tuple[str, ...]     # the boundaries a rigid tool acts on (the default tool.faces)
-    geometry: str                # module (in soilbin.meshes) with geometry(params) -> (regions, boundaries)
+    geometry: str                # module (in soilbin.meshes) with geometry(params, simplices)
+                                 # -> (regions, boundaries)
     slab_faces: tuple[str, ...] = ()  # boundaries only a three-dimensional mesh has
 
     def __post_init__(self):
@@ -59,13 +61,15 @@ class Builder:
         """What the scene's messages call the source of the groups."""
         return f"mesh builder {self.name!r}"
 
-    def build(self, params, comm):
-        """Mesh with gmsh on rank 0 and distribute over ``comm``: a TaggedMesh."""
+    def build(self, params, comm, simplices=False):
+        """Mesh with gmsh on rank 0 and distribute over ``comm``: a TaggedMesh of hexahedra
+        (quadrilaterals), or of tetrahedra (triangles) where ``simplices``."""
         from .tagged import build_tagged_mesh
         geometry = importlib.import_module(f"{__package__}.{self.geometry}").geometry
         regions, boundaries, _ = self.groups(params)
-        return build_tagged_mesh(comm, self.name, lambda: geometry(params), regions=regions,
-                                 boundaries=boundaries, dimension=self.dimension(params))
+        return build_tagged_mesh(comm, self.name, lambda: geometry(params, simplices),
+                                 regions=regions, boundaries=boundaries,
+                                 dimension=self.dimension(params), simplices=simplices)
 
 
 def check_cell_count(cells, keys):

@@ -5,7 +5,8 @@ Its regions are the file's named 3D physical groups and its boundaries the
 named 2D ones, read from the ``$PhysicalNames`` section without gmsh (records
 level), so the scene is checked against them before anything is built: a
 region, support, load or tool face naming a group the file lacks is an error
-naming the file and its groups. Cells must be 8-node hexahedra.
+naming the file and its groups. Cells must be 8-node hexahedra or 4-node tetrahedra,
+as the scene's element needs.
 """
 import dataclasses
 from dataclasses import dataclass
@@ -59,10 +60,10 @@ class FileBuilder(Builder):
     def label(self, params):
         return f"mesh file {params.file}"
 
-    def build(self, params, comm):
+    def build(self, params, comm, simplices=False):
         from .gmsh_file_geometry import read_tagged_mesh
         regions, boundaries, _ = self.groups(params)
-        return read_tagged_mesh(comm, params.file, regions, boundaries)
+        return read_tagged_mesh(comm, params.file, regions, boundaries, simplices)
 
 
 GMSH_FILE = FileBuilder(

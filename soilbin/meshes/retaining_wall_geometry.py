@@ -3,9 +3,9 @@ from .blocks import entities_within, extruded_grid, plane_strain_groups
 from .retaining_wall import RetainingWallParams
 
 
-def geometry(p: RetainingWallParams):
+def geometry(p: RetainingWallParams, simplices: bool):
     toe, facet = -p.wall_height, p.dimension - 1
-    extruded_grid(*p.segments(), p.thickness, 1, p.dimension)
+    extruded_grid(*p.segments(), p.thickness, 1, p.dimension, simplices)
     boundaries = {
         "wall": entities_within(facet, x=0.0, z=(toe, 0.0)),
         "below_wall": entities_within(facet, x=0.0, z=(-p.depth, toe)),

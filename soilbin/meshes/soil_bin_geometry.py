@@ -3,7 +3,7 @@ from .blocks import block_grid, entities_within, on_plane
 from .soil_bin import SoilBinParams, tool_faces
 
 
-def soil_blocks(p: SoilBinParams) -> None:
+def soil_blocks(p: SoilBinParams, simplices: bool) -> None:
     """The (xi, y, z) block grid without the blade's block, mapped to x = xi + shear(z) blend(xi)."""
     d, back = p.tool_depth, p.tip - p.blade
 
@@ -11,11 +11,12 @@ def soil_blocks(p: SoilBinParams) -> None:
         blend = min(xi / back, 1.0, (p.length - xi) / p.ahead)
         return xi - max(z + d, 0.0) / d * p.run * blend, y, z
 
-    block_grid(*p.segments(), keep=lambda i, j, k: (i, j, k) != (1, 0, 1), mapping=mapping)
+    block_grid(*p.segments(), keep=lambda i, j, k: (i, j, k) != (1, 0, 1), mapping=mapping,
+               simplices=simplices)
 
 
-def geometry(p: SoilBinParams):
-    soil_blocks(p)
+def geometry(p: SoilBinParams, simplices: bool):
+    soil_blocks(p, simplices)
     cavity = entities_within(2, x=(p.behind, p.tip), y=(0.0, p.span), z=(-p.tool_depth, 0.0))
     boundaries = {name: on_plane(2, cavity, *plane) for name, plane in tool_faces(p).items()}
     boundaries |= {

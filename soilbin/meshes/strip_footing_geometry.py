@@ -1,6 +1,6 @@
 """The strip-footing builder's gmsh geometry (declaration: :mod:`.strip_footing`):
-quadrilaterals graded from the footing edge in the x-z plane, extruded to one layer of
-hexahedra unless the mesh is two-dimensional."""
+quadrilaterals (or triangles) graded from the footing edge in the x-z plane, extruded to one
+layer of hexahedra (or tetrahedra) unless the mesh is two-dimensional."""
 import gmsh
 
 from .blocks import entities_within, plane_strain_groups
@@ -50,7 +50,7 @@ def corner_grid(geo, b, p):
     return squares, (point[-1, 0], point[1, 0]), rim, point[0, 0]
 
 
-def geometry(p: StripFootingParams):
+def geometry(p: StripFootingParams, simplices: bool):
     b = p.footing_width / 2.0
     geo = gmsh.model.geo
     corner = [geo.addPoint(x, 0.0, z) for x, z in [(0.0, -p.depth), (p.width, -p.depth),
@@ -69,11 +69,12 @@ def geometry(p: StripFootingParams):
     lines += [-tag for tag in reversed(rim)]
     lines += [geo.addLine(ends[1], top_left), geo.addLine(top_left, corner[0])]
     sections = [geo.addPlaneSurface([geo.addCurveLoop(lines)])] + squares
-    for section in sections:
-        geo.mesh.setRecombine(2, section)
+    if not simplices:
+        for section in sections:
+            geo.mesh.setRecombine(2, section)
     if p.dimension == 3:
         geo.extrude([(2, s) for s in sections], 0.0, p.thickness, 0.0, numElements=[1],
-                    recombine=True)
+                    recombine=not simplices)
     geo.synchronize()
     graded_quadrilaterals(edge, p)
     if squares:   # Blossom leaves triangles beside the squares after Frontal-Delaunay

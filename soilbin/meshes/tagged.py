@@ -11,8 +11,13 @@ from mpi4py import MPI
 
 from ..errors import InputError
 
-#: gmsh's name of the cell of a mesh of each dimension.
-GMSH_CELLS = {3: "Hexahedron", 2: "Quadrangle"}
+#: gmsh's name of the cell of a mesh of each (dimension, simplices).
+GMSH_CELLS = {(3, False): "Hexahedron", (2, False): "Quadrangle", (3, True): "Tetrahedron",
+              (2, True): "Triangle"}
+#: Their words in messages, and the elements that use them.
+CELL_WORDS = {(3, False): ("8-node hexahedra", "hex8, hex27"),
+              (2, False): ("4-node quadrilaterals", "quad4, quad9"),
+              (3, True): ("4-node tetrahedra", "tet10"), (2, True): ("3-node triangles", "tri6")}
 #: Group name -> gmsh entity tags (volumes for regions, surfaces for boundaries; in a
 #: two-dimensional mesh surfaces and curves).
 Groups = dict[str, list[int]]
@@ -31,7 +36,7 @@ class TaggedMesh:
 
 def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Groups, Groups]], *,
                       regions: tuple[str, ...], boundaries: tuple[str, ...],
-                      dimension: int = 3) -> TaggedMesh:
+                      dimension: int = 3, simplices: bool = False) -> TaggedMesh:
     """Mesh the gmsh model made by ``geometry`` on rank 0 and distribute it.
 
     ``geometry`` builds and synchronizes the model and returns the entities of
@@ -39,13 +44,15 @@ def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Gr
     boundary; they must be exactly the declared ``regions`` and ``boundaries``,
     none empty. Groups are tagged 1, 2, ... in the declared order, regions
     first, so no two groups share a tag. A two-dimensional geometry is built and
-    meshed in the x-z plane, as the scene sees it.
+    meshed in the x-z plane, as the scene sees it. Its cells must be tetrahedra
+    (triangles) where ``simplices``, else hexahedra (quadrilaterals).
     """
     def model():
         gmsh.model.add(name)
         made_regions, made_boundaries = geometry()
         return _mesh_cells(name, _as_declared(name, "regions", regions, made_regions),
-                           _as_declared(name, "boundaries", boundaries, made_boundaries), dimension)
+                           _as_declared(name, "boundaries", boundaries, made_boundaries), dimension,
+                           simplices)
     return distribute(comm, name, model, dimension)
 
 
@@ -108,9 +115,9 @@ def _as_declared(name: str, kind: str, declared: tuple[str, ...], made: Groups) 
     return {group: made[group] for group in declared}
 
 
-def _mesh_cells(name: str, regions: Groups, boundaries: Groups,
-                dimension: int) -> tuple[dict[str, int], dict[str, int]]:
-    """Add the physical groups, mesh, and check the cells (hexahedra, or quadrilaterals)."""
+def _mesh_cells(name: str, regions: Groups, boundaries: Groups, dimension: int,
+                simplices: bool) -> tuple[dict[str, int], dict[str, int]]:
+    """Add the physical groups, mesh, and check the cells."""
     unassigned = {t for _, t in gmsh.model.getEntities(dimension)} - set().union(*regions.values())
     if unassigned:
         raise RuntimeError(f"entities {sorted(unassigned)} of dimension {dimension} are in no "
@@ -119,7 +126,7 @@ def _mesh_cells(name: str, regions: Groups, boundaries: Groups,
     tags = (_add_physical_groups(dimension, regions, numbers),
             _add_physical_groups(dimension - 1, boundaries, numbers))
     _generate(name, dimension)
-    check_cells(RuntimeError, "gmsh made", dimension)
+    check_cells(RuntimeError, "gmsh made", dimension, simplices)
     return tags
 
 
@@ -140,14 +147,16 @@ def _generate(name: str, dimension: int):
                          f"({errors[0]}); change its lengths or sizes")
 
 
-def check_cells(error, source, dimension=3):
-    """Raise ``error`` unless the model's elements of ``dimension`` are all 8-node hexahedra
-    (4-node quadrilaterals in 2D)."""
+def check_cells(error, source, dimension=3, simplices=False):
+    """Raise ``error`` unless the model's elements of ``dimension`` are all of the one kind
+    expected: 8-node hexahedra (4-node quadrilaterals in 2D), or 4-node tetrahedra (3-node
+    triangles) where ``simplices``."""
     types = list(gmsh.model.mesh.getElementTypes(dimension))
-    if types != [gmsh.model.mesh.getElementType(GMSH_CELLS[dimension], 1)]:
+    if types != [gmsh.model.mesh.getElementType(GMSH_CELLS[dimension, simplices], 1)]:
         made = ", ".join(gmsh.model.mesh.getElementProperties(t)[0] for t in types)
-        only = "8-node hexahedra" if dimension == 3 else "4-node quadrilaterals"
-        raise error(f"{source} {dimension}D elements [{made}]; only {only} are supported")
+        only, elements = CELL_WORDS[dimension, simplices]
+        raise error(f"{source} {dimension}D elements [{made}]; analysis.element ({elements}) "
+                    f"needs {only} only")
 
 
 def _add_physical_groups(dim: int, groups: Groups, numbers) -> dict[str, int]:

@@ -1,16 +1,25 @@
 """The mesh's quality as the soil deforms (updated Lagrangian: the mesh moves with it).
 
-The scaled Jacobian of a hexahedron (a quadrilateral in plane strain) at a corner is the
-determinant of its three (two) edge vectors from that corner over the product of their
-lengths (Knupp 2000, "Achieving finite element mesh quality via optimization of the
-Jacobian matrix norm and associated quantities", the corner condition): 1 where the edges
-are orthogonal, sin of the angle between them in a sheared cell, 0 where they lie in a
-plane and negative where the cell has folded over. A cell's quality is the least over its
-corners, signed by the cell's orientation in the mesh as built (gmsh may number a cell
-either way round); the mesh's is the least over its cells.
+The scaled Jacobian of a cell at a corner is the determinant of its edge vectors from that
+corner (three in 3D, two in plane strain) over the product of their lengths (Knupp 2000,
+"Achieving finite element mesh quality via optimization of the Jacobian matrix norm and
+associated quantities", the corner condition). A hexahedron's (quadrilateral's) corner
+takes its edges along the reference axes: 1 where they are orthogonal, sin of the angle
+between them in a sheared cell. A simplex's corner takes its edges to the other vertices,
+scaled so that the regular tetrahedron (equilateral triangle) has 1, as in the Verdict
+library (Stimpson et al. 2007): √2 det J / Π|e| (2/√3 det J / Π|e|); its Jacobian is
+constant, and its least corner value that of the corner with the longest edges. The value
+is 0 where a cell's edges lie in a plane (a line) and negative where the cell has folded
+over. A cell's quality is the least over its corners, signed by the cell's orientation in
+the mesh as built (gmsh may number a cell either way round); the mesh's is the least over
+its cells.
 """
 import numpy as np
+from dolfinx.mesh import CellType
 from mpi4py import MPI
+
+#: The regular simplex's corner value of det J / Π|e|, by dimension: 1/√2 and √3/2.
+REGULAR_SIMPLEX = {3: 1.0 / np.sqrt(2.0), 2: np.sqrt(3.0) / 2.0}
 
 
 class MeshQuality:
@@ -20,25 +29,41 @@ class MeshQuality:
     def __init__(self, mesh):
         self.mesh = mesh
         dim = mesh.topology.dim
+        self._simplex = mesh.topology.cell_type in (CellType.tetrahedron, CellType.triangle)
         owned = mesh.topology.index_map(dim).size_local
         nodes = mesh.geometry.dofmap.array.reshape(-1, mesh.geometry.dofmap.offsets[1])
-        self._corners = nodes[:owned, :2 ** dim]   # vertices first, tensor-product order
-        self._orientation = np.sign(np.linalg.det(self._centre_jacobian()))
+        corners = dim + 1 if self._simplex else 2 ** dim
+        self._corners = nodes[:owned, :corners]   # vertices first, in the reference order
+        self._orientation = np.sign(np.linalg.det(self._jacobian()))
 
     def _coordinates(self):
         dim = self.mesh.topology.dim
         return self.mesh.geometry.x[self._corners][:, :, :dim]
 
-    def _centre_jacobian(self):
-        """(n, dim, dim) derivative of the (bi/tri)linear map at the cell's centre: the mean
-        of its edges along each reference axis."""
+    def _jacobian(self):
+        """(n, dim, dim) derivative of the cell's map: a simplex's, or the (bi/tri)linear
+        map's at the centre (the mean of the edges along each reference axis)."""
         x, dim = self._coordinates(), self.mesh.topology.dim
+        if self._simplex:
+            return np.stack([x[:, v] - x[:, 0] for v in range(1, dim + 1)], axis=-1)
         low = [[v for v in range(2 ** dim) if not v >> axis & 1] for axis in range(dim)]
         return np.stack([np.mean([x[:, v | 1 << axis] - x[:, v] for v in low[axis]], axis=0)
                          for axis in range(dim)], axis=-1)
 
     def cells(self):
         """(n,) the least scaled Jacobian over each owned cell's corners."""
+        return (self._simplex_corners() if self._simplex else self._brick_corners()) \
+            * self._orientation
+
+    def _simplex_corners(self):
+        x, dim = self._coordinates(), self.mesh.topology.dim
+        longest = np.zeros(len(x))
+        for v in range(dim + 1):
+            lengths = [np.linalg.norm(x[:, w] - x[:, v], axis=-1) for w in range(dim + 1) if w != v]
+            longest = np.maximum(longest, np.prod(lengths, axis=0))
+        return np.linalg.det(self._jacobian()) / longest / REGULAR_SIMPLEX[dim]
+
+    def _brick_corners(self):
         x, dim = self._coordinates(), self.mesh.topology.dim
         least = np.full(len(x), np.inf)
         for v in range(2 ** dim):
@@ -47,7 +72,7 @@ class MeshQuality:
                               for axis in range(dim)], axis=-1)
             lengths = np.prod(np.linalg.norm(edges, axis=1), axis=-1)
             least = np.minimum(least, np.linalg.det(edges) / lengths)
-        return least * self._orientation
+        return least
 
     def minimum(self):
         """The least cell quality of the whole mesh; collective."""

@@ -1,6 +1,6 @@
 """Static condensation of the cell-local mean-dilatation fields, and the rigid-body modes.
 
-The ``hex8-bbar`` system, ordered (u, c) with c = (θ_K, p_K) per cell K,
+The ``hex8-bbar`` (``tet10-bbar``) system, ordered (u, c) with c = (θ_K, p_K) per cell K,
 
     [K   Z] [x_u]   [r_u]
     [Zr  D] [x_c] = [r_c],    D block diagonal with one 2x2 block per cell,
@@ -16,6 +16,7 @@ saves). Dirichlet rows of the mixed matrix are identity rows with zero
 columns, so they stay identity rows of S.
 """
 import numpy as np
+from dolfinx import fem
 from petsc4py import PETSc
 
 
@@ -66,12 +67,13 @@ class Uncondensed:
 
 
 class CellCondensation:
-    """The B-bar displacement system of a ``hex8-bbar`` mixed system (see the module docstring)."""
+    """The B-bar displacement system of a mixed system with P0 cell fields (see the module
+    docstring)."""
     description = "dilatation and pressure condensed out"
 
     def __init__(self, disc):
-        if disc.element.degree != 1:
-            raise ValueError("static condensation needs P0 cell fields (hex8-bbar)")
+        if not disc.element.cell_dilatation:
+            raise ValueError("static condensation needs P0 cell fields (hex8-bbar, tet10-bbar)")
         space, mesh = disc.space, disc.mesh
         imap = space.dofmap.index_map
         to_global = imap.local_to_global
@@ -82,11 +84,14 @@ class CellCondensation:
         # (no space.sub(0).collapse(): its dof reordering takes minutes on 10^6 dofs)
         components = np.stack([space.sub(0).sub(i).dofmap.list.array.reshape(n_local, -1)
                                for i in range(dim)], axis=-1).reshape(-1, dim)
-        nodes = mesh.geometry.dofmap.array.reshape(n_local, -1).ravel()
+        # the nodes' coordinates in the same cell-local order (the scalar space's, whose
+        # cells list their nodes as the mixed space's displacement block does)
+        scalar = fem.FunctionSpace(mesh, ("Lagrange", disc.element.degree))
+        nodes = scalar.dofmap.list.array.reshape(n_local, -1).ravel()
         _, first = np.unique(components[:, 0], return_index=True)
         first = first[components[first, 0] < imap.size_local]       # owned nodes
         u_local = components[first].ravel().astype(np.int32)
-        self._coordinates = disc.in_dof_axes(mesh.geometry.x[nodes[first]])
+        self._coordinates = disc.in_dof_axes(scalar.tabulate_dof_coordinates()[nodes[first]])
         n_cells = cells.size_local
         cell_fields = np.stack([space.sub(i).dofmap.list.array[:n_cells] for i in (1, 2)], axis=1)
         comm = space.mesh.comm

@@ -106,7 +106,7 @@ class LinearSolver:
         if kind is LinearSolverKind.CHOLESKY:
             _mumps(self._ksp, prefix + "ldlt_", "cholesky", n_dofs)
             return
-        bbar = disc.element.mixed and disc.element.degree == 1
+        bbar = disc.element.cell_dilatation
         if kind is LinearSolverKind.BLR:   # any system factorises; B-bar's condensed is smaller
             self._condensed = CellCondensation(disc) if bbar else None
             # the UCFS variant (ICNTL(36) = 1: compress before the update) and compressed
