@@ -174,7 +174,7 @@ def test_a_geometry_that_makes_other_groups_than_declared_is_refused():
 
 def test_every_mesh_is_made_of_the_one_cell_type(box, slab):
     for tm in (box, slab):
-        assert tm.mesh.topology.cell_type.name == CELLS[3]
+        assert tm.mesh.topology.cell_type.name == CELLS["hex"]
 
 
 @pytest.mark.parametrize("tm_name, refine", [("slab", 1), ("slab2", 2)])

@@ -87,8 +87,9 @@ def test_fields_of_a_plane_run_are_in_the_scene_s_three_axes(tmp_path):
 
 
 @pytest.mark.parametrize("override, message", [
-    ("analysis.element=hex8-bbar", "is not an element of the mesh's quadrilaterals "
-                                   "(mesh.dimension = 2): use 'quad4-bbar'"),
+    ("analysis.element=hex8-bbar", "is not an element of a 2D mesh (mesh.dimension = 2): "
+                                   "use 'quad4-bbar'"),
+    ("analysis.element=tet10-bbar", "use 'tri6-bbar'"),
     ("analysis.plane_strain=false", "analysis.plane_strain: mesh.dimension = 2"),
     ("analysis.frame_rotation=[0, 0, 30]", "cannot be turned out of its plane"),
     ("loading.direction=-y", "has no y direction"),
@@ -105,6 +106,9 @@ def test_a_quadrilateral_element_on_the_slab_is_refused():
     with pytest.raises(InputError) as err:
         load_scene(FOOTING, ["mesh.dimension=3", "analysis.element=quad9-bbar"])
     assert "use 'hex27-bbar'" in str(err.value)
+    with pytest.raises(InputError) as err:
+        load_scene(FOOTING, ["mesh.dimension=3", "analysis.element=tri6"])
+    assert "use 'tet10'" in str(err.value)
 
 
 @pytest.mark.slow

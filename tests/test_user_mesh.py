@@ -62,6 +62,37 @@ def test_a_group_the_file_lacks_is_named_with_the_file_and_its_groups(tmp_path, 
         load_scene(path)
 
 
+def test_an_unstructured_tetrahedral_block_collapses_at_the_mohr_coulomb_stress(tmp_path):
+    """A user's tetrahedra (gmsh's Delaunay, no structure) serve the simplex elements: the
+    block's stress is uniform, so tet10-bbar reaches the closed form as the hexahedra do."""
+    from soilbin.app.run import run_scene
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        box = gmsh.model.occ.addBox(0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.6)
+        gmsh.model.addPhysicalGroup(3, [box], 1)
+        gmsh.model.setPhysicalName(3, 1, "soil")
+        for tag, (name, box_min, box_max) in enumerate([
+                ("base", (-1, -1, -1e-6), (2, 2, 1e-6)), ("top", (-1, -1, 1 - 1e-6), (2, 2, 2)),
+                ("xmin", (-1e-6, -1, -1), (1e-6, 2, 2)), ("ymin", (-1, -1e-6, -1), (2, 1e-6, 2))],
+                start=2):
+            faces = [t for _, t in gmsh.model.getEntitiesInBoundingBox(*box_min, *box_max, 2)]
+            gmsh.model.addPhysicalGroup(2, faces, tag)
+            gmsh.model.setPhysicalName(2, tag, name)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(tmp_path / "tetrahedra.msh"))
+    finally:
+        gmsh.finalize()
+    scene = load_scene(scene_file(tmp_path, tmp_path / "tetrahedra.msh",
+                                  ("[regions]", '[analysis]\nelement = "tet10-bbar"\n\n[regions]'),
+                                  ("steps = 20", "steps = 8")))
+    summary = run_scene(scene, tmp_path / "run")
+    assert summary["n_cells"] > 8
+    assert summary["collapse_stress"] == pytest.approx(unconfined_strength(500.0, 30.0), rel=1e-6)
+
+
 def test_files_that_cannot_serve_are_refused(tmp_path):
     from soilbin.app.run import run_scene
     missing = scene_file(tmp_path, tmp_path / "none.msh")
@@ -83,5 +114,6 @@ def test_files_that_cannot_serve_are_refused(tmp_path):
         load_scene(scene_file(tmp_path, tmp_path / "unnamed.msh"))
     scene = load_scene(scene_file(tmp_path, tmp_path / "tetrahedra.msh"))
     with pytest.raises(InputError, match=r"tetrahedra.msh' has 3D elements \[Tetrahedron 4\]; "
-                                         "only 8-node hexahedra are supported"):
+                                         r"analysis.element \(hex8, hex27\) needs 8-node "
+                                         "hexahedra only"):
         run_scene(scene, tmp_path / "run")

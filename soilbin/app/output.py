@@ -113,7 +113,7 @@ def tool_surface(problem):
         return None, None, None
     if dim == 1:
         return corners, np.arange(len(corners)).reshape(-1, 2), "Polyline"
-    face = (CellType.quadrilateral if mesh.topology.cell_type is CellType.hexahedron
+    face = (CellType.quadrilateral if mesh.topology.cell_type == CellType.hexahedron
             else CellType.triangle)
     n = nodes.shape[1]
     return corners, np.arange(len(corners)).reshape(-1, n)[:, perm_vtk(face, n)], XDMF_CELLS[face]

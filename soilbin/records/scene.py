@@ -202,9 +202,11 @@ class Tool(Params):
 
 @dataclasses.dataclass(frozen=True)
 class Analysis(Params):
-    element: Element = param(Element.HEX8, doc="hex8, hex8-reduced (one point per cell), hex8-bbar, hex27 or "
-                                              "hex27-bbar (mean dilatation); on a 2D mesh quad4, "
-                                              "quad4-reduced, quad4-bbar, quad9 or quad9-bbar")
+    element: Element = param(Element.HEX8, doc="hex8, hex8-reduced (one point per cell), hex8-bbar, hex27, "
+                                              "hex27-bbar (mean dilatation) on hexahedra, tet10 or "
+                                              "tet10-bbar on tetrahedra; on a 2D mesh quad4, "
+                                              "quad4-reduced, quad4-bbar, quad9, quad9-bbar, tri6 "
+                                              "or tri6-bbar; the builders mesh with its cells")
     plane_strain: bool = param(False, doc="hold the y displacement at zero everywhere (x-z plane)")
     large_deformation: bool = param(False, doc="updated Lagrangian with an objective stress update "
                                                "(geometric stiffness, moving mesh)")
@@ -466,9 +468,9 @@ def _check_dimension(dimension, analysis, supports, tractions, loading):
     nothing acts along y, and it cannot be turned out of its plane."""
     element = analysis.element
     if element.dimension != dimension:
-        cells = "hexahedra" if dimension == 3 else "quadrilaterals (mesh.dimension = 2)"
-        raise InputError(f"analysis.element = {element.value!r} is not an element of the mesh's "
-                         f"{cells}: use {element.on(dimension).value!r}")
+        mesh = "a 3D mesh" if dimension == 3 else "a 2D mesh (mesh.dimension = 2)"
+        raise InputError(f"analysis.element = {element.value!r} is not an element of {mesh}: "
+                         f"use {element.on(dimension).value!r}")
     if dimension == 3:
         return
     where = "mesh.dimension = 2 (plane strain in the x-z plane)"
