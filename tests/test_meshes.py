@@ -271,3 +271,29 @@ def test_non_hexahedra_are_refused_and_gmsh_is_finalized(monkeypatch):
     with pytest.raises(RuntimeError, match=message):
         build_tagged_mesh(COMM, "tetrahedra", tetrahedra, regions=("soil",), boundaries=())
     assert len(calls) == 1
+
+
+def region_volumes(tm):
+    dx = ufl.Measure("dx", domain=tm.mesh, subdomain_data=tm.cell_tags)
+    one = fem.Constant(tm.mesh, 1.0)
+    return {name: total(one * dx(tag)) for name, tag in tm.regions.items()}
+
+
+@pytest.mark.parametrize("name, values, split", [
+    ("box", {"nx": 2, "ny": 3, "nz": 2}, True),
+    ("strip_footing", {}, False),
+    ("retaining_wall", {"element_size": 3.0}, True),
+    ("soil_bin", {"element_size": 1.5, "growth": 1.6, "ahead": 10.0, "behind": 10.0,
+                  "bin_width": 10.0}, True),
+])
+def test_tetrahedra_fill_the_hexahedral_mesh_s_groups(name, values, split):
+    """simplices: each region's volume and each boundary's area are the hexahedral mesh's;
+    the block grids split every brick in six tetrahedra on the same nodes, the strip
+    footing's unstructured plane is triangulated afresh and extruded."""
+    builder = BUILDERS[name]
+    params = from_table(builder.params, values, "mesh")
+    bricks, tets = builder.build(params, COMM), builder.build(params, COMM, simplices=True)
+    assert tets.mesh.topology.cell_type == CellType.tetrahedron
+    assert (num_cells(tets) == 6 * num_cells(bricks)) == split
+    assert region_volumes(tets) == pytest.approx(region_volumes(bricks), rel=1e-12)
+    assert face_areas(tets) == pytest.approx(face_areas(bricks), rel=1e-12)
