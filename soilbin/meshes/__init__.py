@@ -8,14 +8,14 @@ its ``*_geometry`` module, imported only by :meth:`.builder.Builder.build`.
 """
 from .box import BOX, BoxParams
 from .builder import Builder
+from .cad_tool import SOIL_BIN_CAD, CadToolParams
 from .gmsh_file import GMSH_FILE, GmshFileParams
 from .retaining_wall import RETAINING_WALL, RetainingWallParams
 from .soil_bin import SOIL_BIN, SoilBinParams
 from .strip_footing import STRIP_FOOTING, StripFootingParams
 
-BUILDERS: dict[str, Builder] = {b.name: b for b in (BOX, STRIP_FOOTING, SOIL_BIN, RETAINING_WALL,
-                                                     GMSH_FILE)}
-
+BUILDERS: dict[str, Builder] = {b.name: b for b in (BOX, STRIP_FOOTING, SOIL_BIN, SOIL_BIN_CAD,
+                                                     RETAINING_WALL, GMSH_FILE)}
 
 
 def scene_mesh(scene, comm):
@@ -25,4 +25,4 @@ def scene_mesh(scene, comm):
 
 
 __all__ = ["BUILDERS", "Builder", "scene_mesh", "BoxParams", "StripFootingParams", "SoilBinParams",
-           "RetainingWallParams", "GmshFileParams"]
+           "CadToolParams", "RetainingWallParams", "GmshFileParams"]

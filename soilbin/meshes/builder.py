@@ -57,6 +57,10 @@ class Builder:
             boundaries = tuple(b for b in boundaries if b not in self.slab_faces)
         return self.regions, boundaries, self.contact
 
+    def check_element(self, params, element):
+        """Raise an InputError if the builder cannot mesh the cells of ``element`` (an
+        elements.Element) with ``params``; every builder meshes hexahedra and tetrahedra."""
+
     def label(self, params):
         """What the scene's messages call the source of the groups."""
         return f"mesh builder {self.name!r}"

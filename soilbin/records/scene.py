@@ -429,6 +429,7 @@ def _parse(raw, path):
 
     analysis = from_table(Analysis, raw.get("analysis", {}), "analysis")
     _check_dimension(builder.dimension(mesh), analysis, supports, tractions, loading)
+    builder.check_element(mesh, analysis.element)
     _check_held(supports, loading, analysis, tool)
     headline = {}
     unread, driven = ((BOUNDARY_HEADLINES, "a tool") if loading.boundary == TOOL

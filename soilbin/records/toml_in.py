@@ -41,8 +41,9 @@ def read_scene_tables(path, _chain=()):
 
     ``base`` is the name of a scene in scenes/ or a path relative to the scene's folder; the
     base may have a base of its own. Tables merge key by key, any other value (arrays of
-    tables included) is replaced whole. A relative path of the base's ``[mesh]`` (a key
-    ``file`` or ``*_file``) stays relative to the base's folder."""
+    tables included) is replaced whole, and so is a ``[mesh]`` that names another
+    builder. A relative path of the base's ``[mesh]`` (a key ``file`` or ``*_file``) stays
+    relative to the base's folder."""
     path = Path(path)
     raw = read_toml(path)
     base = raw.pop("base", None)
@@ -60,8 +61,11 @@ def read_scene_tables(path, _chain=()):
     if not base_path.is_file():
         raise InputError(f"{path}: base = {base!r}: no such scene ({base_path})")
     tables = read_scene_tables(base_path, chain)
-    mesh = tables.get("mesh")
-    if isinstance(mesh, dict):
+    mesh, top_mesh = tables.get("mesh"), raw.get("mesh")
+    if isinstance(mesh, dict) and isinstance(top_mesh, dict) and \
+            top_mesh.get("builder", mesh.get("builder")) != mesh.get("builder"):
+        del tables["mesh"]
+    elif isinstance(mesh, dict):
         for key, value in mesh.items():
             if (key == "file" or key.endswith("_file")) and isinstance(value, str):
                 mesh[key] = str(base_path.parent / value)

@@ -1,0 +1,76 @@
+"""The soil bin around a tool read from a CAD file (builder soil_bin_cad): the solid placed
+and cut out, its faces the contact group, and every file or placement it cannot use
+refused in one line before meshing."""
+import gmsh
+import numpy as np
+import pytest
+import ufl
+from dolfinx import fem
+from dolfinx.cpp.mesh import entities_to_geometry
+from mpi4py import MPI
+
+from soilbin.errors import InputError
+from soilbin.meshes import scene_mesh
+from soilbin.records.scene import load_scene
+from conftest import SCENES
+
+CAD = SCENES / "tine-2in-cad.toml"
+COMM = MPI.COMM_WORLD
+INCH = 25.4
+
+
+def total(form):
+    return COMM.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
+
+
+def write_step(path, shape):
+    """A STEP file of the solid (or surface) ``shape(occ)`` makes, in millimetres."""
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        shape(gmsh.model.occ)
+        gmsh.model.occ.synchronize()
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return path
+
+
+@pytest.mark.parametrize("configuration, width", [("embedded", 1.0), ("side_wall", 2.0)])
+def test_the_blade_s_cavity_is_the_tool_group(configuration, width):
+    """The STEP blade (0.5 x 2 in, 6 in in the soil): the soil is the bin less the blade's
+    part below the surface, the group tool its faces there (half the blade embedded, the
+    glass wall against its side otherwise)."""
+    scene = load_scene(CAD, [f"mesh.configuration={configuration}", "mesh.element_size=1.5",
+                             "mesh.growth=1.8"])
+    p = scene.mesh
+    tm = scene_mesh(scene, COMM)
+    assert tm.mesh.topology.cell_type.name == "tetrahedron"
+    one = fem.Constant(tm.mesh, 1.0)
+    ds = ufl.Measure("ds", domain=tm.mesh, subdomain_data=tm.facet_tags)
+    length = p.behind + 0.5 + p.ahead
+    assert total(one * ufl.dx(domain=tm.mesh)) == pytest.approx(
+        length * p.bin_width * p.bin_depth - width * 0.5 * 6.0, rel=1e-9)
+    front_back, side, bottom = 2 * width * 6.0, 0.5 * 6.0, 0.5 * width
+    assert total(one * ds(tm.boundaries["tool"])) == pytest.approx(front_back + side + bottom,
+                                                                  rel=1e-9)
+    assert total(one * ds(tm.boundaries["surface"])) == pytest.approx(
+        length * p.bin_width - 0.5 * width, rel=1e-9)
+
+
+def test_a_raked_tool_leans_back_with_its_lowest_point_at_the_tool_depth():
+    """rake_angle 60: the blade turned 30 degrees about y, its top back; the tool's faces
+    reach down to tool_depth and lean back by tan 30 per unit of height."""
+    scene = load_scene(CAD, ["mesh.rake_angle=60", "mesh.element_size=1.5", "mesh.growth=1.8"])
+    tm = scene_mesh(scene, COMM)
+    facets = tm.facet_tags.find(tm.boundaries["tool"])
+    x = tm.mesh.geometry.x[entities_to_geometry(tm.mesh._mesh, 2, facets, False).ravel()]
+    lowest = COMM.allreduce(x[:, 2].min(initial=np.inf), op=MPI.MIN)
+    assert lowest == pytest.approx(-6.0, abs=1e-9)
+    deepest = x[np.isclose(x[:, 2], lowest)]
+    top = x[np.isclose(x[:, 2], 0.0)]
+    # the front edge at the surface lies tan 30 x (6 - the corner's rise) behind the tip
+    rise = 0.5 * np.sin(np.radians(30.0))
+    assert top[:, 0].max() == pytest.approx(deepest[:, 0].max() + 0.5 * np.cos(np.radians(30.0))
+                                            - (6.0 - rise) * np.tan(np.radians(30.0))
+                                            , abs=1e-9)
