@@ -74,3 +74,47 @@ def test_a_raked_tool_leans_back_with_its_lowest_point_at_the_tool_depth():
     assert top[:, 0].max() == pytest.approx(deepest[:, 0].max() + 0.5 * np.cos(np.radians(30.0))
                                             - (6.0 - rise) * np.tan(np.radians(30.0))
                                             , abs=1e-9)
+
+
+def plate(occ):
+    """A surface, not a solid."""
+    occ.addRectangle(0.0, 0.0, 0.0, 50.0, 50.0)
+
+
+def ell(occ):
+    """An L-shaped solid, not symmetric about any plane y = const."""
+    occ.fuse([(3, occ.addBox(0.0, 0.0, 0.0, 12.7, 50.8, 200.0))],
+             [(3, occ.addBox(0.0, 0.0, 0.0, 60.0, 12.7, 200.0))])
+
+
+@pytest.mark.parametrize("overrides, shape, message", [
+    (["mesh.tool_file=garbage.step"], None, "gmsh cannot read it"),
+    (["mesh.tool_file=plate.step"], plate, "holds no closed solid"),
+    (["mesh.tool_file=ell.step"], ell, "not symmetric about its mid-plane in y"),
+    (["mesh.configuration=side_wall", "mesh.bin_width=1.5"], None,
+     "the tool reaches y = 2, beyond the bin's side: mesh.bin_width = 1.5 must be more"),
+    (["mesh.tool_depth=10"], None, "the tool's top lies 2 below the surface"),
+    (["mesh.element_size=0.1", "mesh.growth=1.01"], None,
+     r"about 5.27e\+06 tetrahedra; accepted: at most 1e\+06"),
+])
+def test_a_tool_the_bin_cannot_hold_is_refused_before_meshing(tmp_path, overrides, shape,
+                                                              message):
+    (tmp_path / "garbage.step").write_text("not a STEP file")
+    if shape is not None:
+        write_step(tmp_path / overrides[0].split("=")[1], shape)
+    overrides = [o.replace("=", f"={tmp_path}/") if o.startswith("mesh.tool_file") else o
+                 for o in overrides]
+    scene = load_scene(CAD, overrides)
+    with pytest.raises(InputError, match=message):
+        scene_mesh(scene, COMM)
+
+
+@pytest.mark.parametrize("overrides, message", [
+    (["mesh.tool_file=blade.stl"], "not a CAD file gmsh reads; accepted: .step, .stp, .iges"),
+    (["mesh.tool_file=none.step"], "none.step': no such file"),
+    (["analysis.element=hex8-bbar"], "meshes tetrahedra; use tet10-bbar"),
+    (["mesh.tool_depth=12"], "tool_depth = 12.0 must be less than bin_depth = 12.0"),
+])
+def test_a_scene_that_cannot_mesh_its_tool_is_refused_when_read(overrides, message):
+    with pytest.raises(InputError, match=message):
+        load_scene(CAD, overrides)

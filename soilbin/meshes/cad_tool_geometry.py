@@ -1,6 +1,10 @@
 """The CAD-tool soil bin's gmsh geometry (declaration: :mod:`.cad_tool`): the tool's solid
 read, raked and placed, checked against the bin, cut out of it, its faces tagged, and
 the mesh size graded from them. Every refusal is an InputError raised before meshing."""
+import contextlib
+import os
+import sys
+
 import gmsh
 import numpy as np
 
@@ -46,9 +50,11 @@ def _read_solid(path):
     or it holds no closed solid."""
     occ = gmsh.model.occ
     try:
-        shapes = occ.importShapes(path)
+        with _c_stdout_silenced():
+            shapes = occ.importShapes(path)
     except Exception as err:   # gmsh raises a bare Exception with its logger's last error
-        raise InputError(f"mesh.tool_file = {path!r}: gmsh cannot read it ({err})") from None
+        raise InputError(f"mesh.tool_file = {path!r}: gmsh cannot read it ({err}); accepted: "
+                         "a STEP, IGES or BREP file holding one closed solid") from None
     volumes = [s for s in shapes if s[0] == 3]
     if not volumes:
         raise InputError(f"mesh.tool_file = {path!r}: holds no closed solid (only "
@@ -58,6 +64,21 @@ def _read_solid(path):
     occ.remove([s for s in shapes if s[0] < 3], recursive=True)
     occ.synchronize()
     return volumes
+
+
+@contextlib.contextmanager
+def _c_stdout_silenced():
+    """OpenCASCADE's STEP and IGES readers print to the C stdout, past gmsh's logger: a
+    run's stdout (its --json line) stays the run's."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    with open(os.devnull, "wb") as null:
+        os.dup2(null.fileno(), 1)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 def _place(tool, p: CadToolParams):
