@@ -13,18 +13,24 @@ from doc_tables import FIGURES, ROOT, add_page_argument
 SOILBIN = Path(sys.executable).with_name("soilbin")
 
 
-def arguments(doc, name, page):
+def arguments(doc, name, page, studies=()):
     """--out (default runs/NAME), --jobs, --page (default docs/PAGE), --figures (default
-    docs/figures), --no-run."""
+    docs/figures), --no-run; with ``studies``, --study (one of them, default NAME), and
+    --out defaults to runs/STUDY."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=ROOT / "runs" / name)
+    parser.add_argument("--out", type=Path)
+    if studies:
+        parser.add_argument("--study", choices=studies, default=name,
+                            help=f"the study to run and tabulate (default {name})")
     parser.add_argument("--jobs", type=int, default=1)
     add_page_argument(parser, page)
     parser.add_argument("--figures", type=Path, default=FIGURES,
                         help="copy the page's figures into this folder (default docs/figures)")
     parser.add_argument("--no-run", action="store_true",
                         help="only the tables, from the cases finished so far")
-    return parser.parse_args()
+    args = parser.parse_args()
+    args.out = args.out or ROOT / "runs" / getattr(args, "study", name)
+    return args
 
 
 def run_study(study, args, out=None):

@@ -1,11 +1,13 @@
-"""The 2-in tine's draft against the mesh: studies/tine-mesh.toml, its table in docs/chapter8.md.
+"""The 2-in tine's draft against the mesh: studies/tine-mesh.toml (the built-in blade on
+hexahedra) or, with --study tine-cad-mesh, studies/tine-cad-mesh.toml (the blade from a
+STEP file on tetrahedra); their tables in docs/chapter8.md.
 
-Runs `soilbin study studies/tine-mesh.toml` (resumable), then reads each case's
-summary.json and curve.csv and writes between the tine-mesh markers of
+Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's
+summary.json and curve.csv and writes between the STUDY markers of
 docs/chapter8.md (--page), per mesh: cells, unknowns, Newton iterations and
 steps to 0.5 in, the draft and the lift at 0.1 and 0.5 in of travel, each draft
 against the finest mesh's, and the CPU time; below it the fit D = D_inf + C h^p
-through the three finest levels of one growth. Copies the study's tine-mesh.png
+through the three finest levels of one growth. Copies the study's STUDY.png
 into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
 import shutil
@@ -18,7 +20,7 @@ from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
 from study_tables import arguments, finished, run_study
 
-STUDY = ROOT / "studies" / "tine-mesh.toml"
+STUDIES = ("tine-mesh", "tine-cad-mesh")
 TRAVELS = (0.1, 0.5)
 SIZE, GROWTH = "mesh.element_size", "mesh.growth"
 
@@ -93,9 +95,10 @@ def fit_line(results):
 
 
 def main():
-    args = arguments(__doc__, "tine-mesh", "chapter8.md")
-    run_study(STUDY, args)
-    study = load_study(STUDY)
+    args = arguments(__doc__, "tine-mesh", "chapter8.md", STUDIES)
+    path = ROOT / "studies" / f"{args.study}.toml"
+    run_study(path, args)
+    study = load_study(path)
     results = [r for r in finished(study, args.out) if r[1]["status"] == "complete"]
     if not results:
         raise SystemExit(f"{args.out}: no finished case")
@@ -105,8 +108,8 @@ def main():
     print(text)
     draw_figures(study, [Outcome(case, summary["status"], summary, ran=False)
                          for case, summary, _ in results], args.out)
-    shutil.copy(args.out / "tine-mesh.png", args.figures / "tine-mesh.png")
-    write_between_markers(args.page, "tine-mesh", text)
+    shutil.copy(args.out / f"{args.study}.png", args.figures / f"{args.study}.png")
+    write_between_markers(args.page, args.study, text)
 
 
 if __name__ == "__main__":

@@ -8,16 +8,19 @@ arrive in millimetres (OpenCASCADE converts the file's own unit), BREP in its ba
 numbers; ``tool_scale`` turns them into the scene's length unit. The builder turns
 the solid about y by 90° − ``rake_angle`` (the top back), puts its lowest point at
 ``tool_depth`` below the ground surface z = 0, its rearmost point ``behind`` from the
-bin's back end, and in y either its low side on the glass wall y = 0 (``side_wall``)
+bin's back end, and in y either its low side on the glass wall y = 0 (``side_wall``),
 or its middle on the symmetry plane y = 0 (``embedded``: half of a tool symmetric
-about its mid-plane, refused if it is not). The tool is not meshed: the soil is the
-bin minus the solid, and every soil face that is not on the bin's six planes is the
-contact group ``tool``. Elements are ``element_size`` long at the tool and grow
+about its mid-plane, refused if it is not), or its middle at y = 0 in a bin reaching
+``bin_width`` to either side (``full``: a tool of any shape, no symmetry plane, both
+sides the group ``side``). The tool is not meshed: the soil is the bin minus the
+solid, and every soil face that is not on the bin's planes is the contact group
+``tool``. Elements are ``element_size`` long at the tool and grow
 linearly with the distance d from it, h = element_size + (growth − 1) d (the size of
 a mesh whose neighbouring elements differ by the factor ``growth``), up to a
 quarter of the bin's depth.
 """
 import dataclasses
+import enum
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +28,14 @@ from pathlib import Path
 from ..errors import InputError
 from ..params import Params, param
 from .builder import Builder, check_proportions, length_param
-from .soil_bin import Configuration
+
+
+
+class Configuration(enum.Enum):
+    SIDE_WALL = "side_wall"    # the whole tool, against the bin's glass wall y = 0
+    EMBEDDED = "embedded"      # half a symmetric tool, y = 0 its mid-plane and a symmetry plane
+    FULL = "full"              # the whole tool in the middle of a bin twice bin_width wide
+
 
 #: The files gmsh's OpenCASCADE kernel reads, by suffix.
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
@@ -49,11 +59,13 @@ class CadToolParams(Params):
                               doc="the tool as drawn is turned about y by 90 - rake_angle "
                                   "[degrees], its top back (90: as drawn)")
     configuration: Configuration = param(
-        Configuration.SIDE_WALL, doc="side_wall (the tool's low side on the glass wall y = 0) or "
+        Configuration.SIDE_WALL, doc="side_wall (the tool's low side on the glass wall y = 0), "
                                      "embedded (half of a tool symmetric about its mid-plane, "
-                                     "which is the symmetry plane y = 0)")
+                                     "which is the symmetry plane y = 0) or full (the whole "
+                                     "tool in a bin from -bin_width to bin_width)")
     bin_depth: float = length_param(12.0, "depth of the soil (> tool_depth)")
-    bin_width: float = length_param(18.0, "extent of the soil in y from y = 0 (> the tool's)")
+    bin_width: float = length_param(18.0, "extent of the soil in y from y = 0, to either side "
+                                          "when full (> the tool's)")
     ahead: float = param(None, lo=0.0, hi=1.0e6, lo_open=True,
                          doc=f"soil ahead of the tool's foremost point; default {END_DEPTHS:g} "
                              "tool depths")
@@ -108,6 +120,12 @@ class CadToolBuilder(Builder):
         if not path.is_file():
             raise InputError(f"mesh.tool_file = {str(path)!r}: no such file")
         return dataclasses.replace(params, tool_file=str(path))
+
+    def groups(self, params):
+        regions, boundaries, contact = super().groups(params)
+        if Configuration(params.configuration) is Configuration.FULL:
+            boundaries = tuple(b for b in boundaries if b != "symmetry")
+        return regions, boundaries, contact
 
     def check_element(self, params, element):
         if not element.simplex:

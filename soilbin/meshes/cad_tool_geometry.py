@@ -10,8 +10,7 @@ import numpy as np
 
 from ..errors import InputError
 from .builder import MAX_CELLS
-from .cad_tool import CadToolParams
-from .soil_bin import Configuration
+from .cad_tool import CadToolParams, Configuration
 
 #: Tetrahedra per cubed element length: a regular tetrahedron of edge h has the volume
 #: h^3 / (6 sqrt 2); gmsh's Delaunay cells, measured on the flat blade, come to about
@@ -26,19 +25,23 @@ def geometry(p: CadToolParams, simplices: bool):
     tool = _read_solid(p.tool_file)
     x0, y0, z0, x1, y1, z1 = _place(tool, p)
     length = p.behind + (x1 - x0) + p.ahead
-    _check_fits(p, (y0, y1), z1)
-    if Configuration(p.configuration) is Configuration.EMBEDDED:
+    configuration = Configuration(p.configuration)
+    full = configuration is Configuration.FULL
+    y_min = -p.bin_width if full else 0.0
+    _check_fits(p, (y_min, p.bin_width), (y0, y1), z1)
+    if configuration is Configuration.EMBEDDED:
         _check_symmetric(tool, p.tool_file)
-    _check_cell_count(p, (x0, y0, z0, x1, y1, z1), length)
-    soil, _ = occ.cut([(3, occ.addBox(0.0, 0.0, -p.bin_depth, length, p.bin_width, p.bin_depth))],
-                      tool)
+    _check_cell_count(p, (x0, y0, z0, x1, y1, z1), length, y_min)
+    soil, _ = occ.cut([(3, occ.addBox(0.0, y_min, -p.bin_depth, length, p.bin_width - y_min,
+                                      p.bin_depth))], tool)
     occ.synchronize()
-    planes = {"back_end": (0, 0.0), "front_end": (0, length), "symmetry": (1, 0.0),
-              "side": (1, p.bin_width), "base": (2, -p.bin_depth), "surface": (2, 0.0)}
-    boundaries = {name: [] for name in ["tool", *planes]}
+    planes = [("back_end", 0, 0.0), ("front_end", 0, length),
+              ("side" if full else "symmetry", 1, y_min), ("side", 1, p.bin_width),
+              ("base", 2, -p.bin_depth), ("surface", 2, 0.0)]
+    boundaries = {name: [] for name in ["tool", *(name for name, _, _ in planes)]}
     for _, face in gmsh.model.getBoundary(soil, oriented=False):
         centre = occ.getCenterOfMass(2, face)
-        on = [name for name, (axis, value) in planes.items()
+        on = [name for name, axis, value in planes
               if abs(centre[axis] - value) <= ON_PLANE * length]
         boundaries[on[0] if on else "tool"].append(face)
     _grade(p, boundaries["tool"])
@@ -88,7 +91,7 @@ def _place(tool, p: CadToolParams):
     if p.rotation:
         occ.rotate(tool, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, p.rotation)
     x0, y0, z0, x1, y1, z1 = _bounds(tool)
-    dy = -0.5 * (y0 + y1) if Configuration(p.configuration) is Configuration.EMBEDDED else -y0
+    dy = -y0 if Configuration(p.configuration) is Configuration.SIDE_WALL else -0.5 * (y0 + y1)
     occ.translate(tool, p.behind - x0, dy, -p.tool_depth - z0)
     return _bounds(tool)
 
@@ -108,11 +111,13 @@ def _bounds(tool):
     return tuple(np.where(np.abs(vertex - box) <= tolerance, vertex, box))
 
 
-def _check_fits(p: CadToolParams, span, top):
-    """The tool, placed, within the bin's width, and reaching up through the surface."""
-    if span[1] >= p.bin_width:
-        raise InputError(f"mesh.tool_file = {p.tool_file!r}: the tool reaches y = {span[1]:.4g}, "
-                         f"beyond the bin's side: mesh.bin_width = {p.bin_width:g} must be more")
+def _check_fits(p: CadToolParams, sides, span, top):
+    """The tool, placed, within the bin's ``sides`` in y, and reaching up through the
+    surface."""
+    if span[1] >= sides[1] or (sides[0] < 0.0 and span[0] <= sides[0]):
+        raise InputError(f"mesh.tool_file = {p.tool_file!r}: the tool reaches y = "
+                         f"{span[1]:.4g}, beyond the bin's side: mesh.bin_width = "
+                         f"{p.bin_width:g} must be more")
     if top <= 0.0:
         raise InputError(f"mesh.tool_file = {p.tool_file!r}: the tool's top lies "
                          f"{-top:.4g} below the surface: a tool of height "
@@ -136,18 +141,18 @@ def _check_symmetric(tool, path):
                          "has no mirror image); configuration = 'side_wall' holds it whole")
 
 
-def _check_cell_count(p: CadToolParams, box, length):
+def _check_cell_count(p: CadToolParams, box, length, y_min):
     """Refuse, before meshing, a mesh of more than MAX_CELLS tetrahedra: the size field
     integrated over the bin on a grid, with the distance from the tool's bounding box."""
     x0, y0, z0, x1, y1, z1 = box
     n = 40
     x, y, z = np.meshgrid(*(np.linspace(lo, hi, n) for lo, hi in
-                            [(0.0, length), (0.0, p.bin_width), (-p.bin_depth, 0.0)]),
+                            [(0.0, length), (y_min, p.bin_width), (-p.bin_depth, 0.0)]),
                           indexing="ij")
     distance = np.sqrt(sum(np.maximum(np.maximum(lo - c, c - hi), 0.0) ** 2
                            for c, lo, hi in [(x, x0, x1), (y, y0, y1), (z, z0, z1)]))
     size = np.minimum(p.element_size + (p.growth - 1.0) * distance, p.far_size)
-    cells = CELLS_PER_CUBE * np.mean(size ** -3.0) * length * p.bin_width * p.bin_depth
+    cells = CELLS_PER_CUBE * np.mean(size ** -3.0) * length * (p.bin_width - y_min) * p.bin_depth
     if cells > MAX_CELLS:
         raise InputError(f"mesh.element_size = {p.element_size:g} and growth = {p.growth:g} "
                          f"give about {cells:.3g} tetrahedra; accepted: at most {MAX_CELLS:g}")

@@ -17,6 +17,8 @@ def _scalar(v):
         return json.dumps(v)
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_scalar(x) for x in v) + "]"
+    if isinstance(v, dict):   # an inline table
+        return "{" + ", ".join(f"{k} = {_scalar(x)}" for k, x in v.items()) + "}"
     raise TypeError(f"cannot write {v!r} as TOML")
 
 
