@@ -126,24 +126,35 @@ def block_scene(tmp_path, supports):
     return path
 
 
-def test_sliding_block_carries_adhesion_plus_friction(tmp_path, solve_file):
+#: The patch tests on the box's quadrilateral faces and on its triangles (each brick in six
+#: tetrahedra).
+ELEMENTS = pytest.mark.parametrize("element", ["hex8", "tet10-bbar"])
+
+
+@ELEMENTS
+def test_sliding_block_carries_adhesion_plus_friction(tmp_path, solve_file, element):
     """Shear force at slip = c_a A + N tan(delta), with N = p A (A = 2, p = 50)."""
-    summary, rows, problem = solve_file(block_scene(tmp_path, HELD_AT_WALL))
+    summary, rows, problem = solve_file(block_scene(tmp_path, HELD_AT_WALL),
+                                        f"analysis.element={element}")
     slip_force = 2.0 * 2.0 + 50.0 * 2.0 * math.tan(math.radians(20.0))
     assert rows[-1]["force"] == pytest.approx(slip_force, rel=1e-9)
 
 
-def test_block_pulled_off_the_tool_separates(tmp_path, solve_file):
-    summary, rows, problem = solve_file(block_scene(tmp_path, HELD_AT_TOP), "loading.direction=-z")
+@ELEMENTS
+def test_block_pulled_off_the_tool_separates(tmp_path, solve_file, element):
+    summary, rows, problem = solve_file(block_scene(tmp_path, HELD_AT_TOP), "loading.direction=-z",
+                                        f"analysis.element={element}")
     assert all(row["force"] == 0.0 for row in rows)
     assert np.allclose(problem.tool.interface.gap(), 0.01)
 
 
 @pytest.mark.parametrize("held, direction, stiffness", [(HELD_AT_WALL, "+x", 1.0e5),
                                                       (HELD_AT_TOP, "+z", 1.0e6)])
-def test_stick_stiffness_is_the_penalty(tmp_path, solve_file, held, direction, stiffness):
+@ELEMENTS
+def test_stick_stiffness_is_the_penalty(tmp_path, solve_file, held, direction, stiffness, element):
     """The plate moved by U along or against a stiff block that sticks: F = k A U."""
     summary, rows, _ = solve_file(block_scene(tmp_path, held), f"loading.direction={direction}",
+                                  f"analysis.element={element}",
                                   "loading.magnitude=1e-6", "tool.interface.c_a=1e9",
                                   "materials.soil.E=1e10")
     assert rows[-1]["force"] == pytest.approx(stiffness * 2.0 * 1e-6, rel=2e-3)
