@@ -23,6 +23,12 @@ def curve(path):
     ("column-elastic", []),
     # the wall's contact points all on one rank: the other adds no interface entries
     ("retaining-wall-passive-rough", ["--set", "mesh.element_size=2", "--set", "output.fields=[]"]),
+    # a tool from a STEP file on tetrahedra (tet10-bbar), its triangles split between ranks
+    ("tine-2in-cad", [arg for key in ("mesh.element_size=1.5", "mesh.growth=1.8",
+                                      "loading.control=displacement", "loading.magnitude=0.01",
+                                      "loading.steps=2", "loading.first_cuts=0",
+                                      "loading.until_collapse=false", "output.at=[]",
+                                      "output.fields=[]") for arg in ("--set", key)]),
 ])
 @pytest.mark.slow
 def test_two_ranks_match_serial(tmp_path, scene, overrides):
