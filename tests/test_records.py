@@ -35,7 +35,8 @@ def test_the_records_layer_loads_no_fenicsx_gmsh_or_mpi():
 
 def test_every_builder_declares_its_contact_groups_among_its_boundaries():
     assert {name: b.contact for name, b in BUILDERS.items()} == {
-        "box": (), "strip_footing": (), "soil_bin": TOOL_FACES, "retaining_wall": (), "gmsh": ()}
+        "box": (), "strip_footing": (), "soil_bin": TOOL_FACES, "soil_bin_cad": ("tool",),
+        "retaining_wall": (), "gmsh": ()}
     for name, builder in BUILDERS.items():
         assert builder.name == name and builder.summary
         assert builder.regions or name == "gmsh"   # a file's groups are the file's
