@@ -1,6 +1,9 @@
 """The quadratic simplices (tet10, tet10-bbar, tri6, tri6-bbar) on the builders' meshes split
 into tetrahedra (triangles): the verification problems of chapter VII against their closed
 forms, as the bricks meet them."""
+import csv
+import math
+
 import pytest
 
 from soilbin.closed_form.verification import (column_settlement, prandtl_limit_pressure,
@@ -33,3 +36,17 @@ def test_mean_dilatation_triangles_reach_prandtl_and_plain_ones_lock(solve, nu):
     exact = prandtl_limit_pressure(17.5)
     assert abs(bbar["limit_pressure"] / exact - 1.0) < 0.002
     assert plain["limit_pressure"] / exact - 1.0 > 0.008
+
+
+def test_the_tetrahedral_column_follows_log_strain_in_large_deformation(solve):
+    """VII.1, eq. 7.6, updated Lagrangian on tetrahedra: sigma = M ln(L / (L - w)) to 30%
+    of the height, as the bricks (the same curve to 1e-12: the column strains uniformly)."""
+    summary, out = solve("column-elastic-large", "analysis.element=tet10-bbar")
+    with open(out / "curve.csv") as f:
+        rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    bricks, _ = solve("column-elastic-large")   # into the same folder: the curve read first
+    M, L = 9000.0 * 0.8 / (1.2 * 0.6), 10.0
+    assert rows[-1]["displacement"] / L >= 0.3
+    for row in rows:
+        assert row["pressure"] == pytest.approx(M * math.log(L / (L - row["displacement"])), rel=5e-3)
+    assert summary["top_settlement"] == pytest.approx(bricks["top_settlement"], rel=1e-12)
