@@ -40,7 +40,7 @@ def test_small_deformation_column_stays_linear(solve):
 
 
 @pytest.mark.parametrize("element, c", [("hex8", 1e9), ("hex8", 500.0), ("hex8-bbar", 500.0),
-                                        ("hex27-bbar", 500.0)])
+                                        ("hex27-bbar", 500.0), ("tet10-bbar", 500.0)])
 def test_updated_lagrangian_jacobian_is_consistent(element, c):
     """Material + geometric stiffness + linearised rotation = the derivative of the residual."""
     problem = make_problem("block-drucker-prager", "analysis.large_deformation=true", "mesh.nx=2",
