@@ -198,14 +198,18 @@ def test_the_jit_compiler_logs_nothing_below_warnings():
     assert done.stderr.strip() == "WARNING:root:kept"
 
 
-def test_the_3d_picture_is_drawn_off_screen(tmp_path):
+@pytest.mark.parametrize("cells, faces", [
+    (np.array([[0, 1, 3, 2, 4, 5, 7, 6]]), np.array([[0, 1, 2, 3]])),          # a brick
+    (np.array([[0, 1, 3, 7], [0, 3, 2, 7]]), np.array([[0, 1, 2], [0, 2, 3]])),  # tetrahedra
+])
+def test_the_3d_picture_is_drawn_off_screen(tmp_path, cells, faces):
     """pyvista in its own process (VTK and DOLFINx clash in one): a PNG of the set size."""
     from matplotlib.image import imread
     from soilbin.app.figures_3d import draw_in_subprocess
     corners = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
-    soil = (corners, np.array([[0, 1, 3, 2, 4, 5, 7, 6]]), {"displacement": 0.01 * corners},
-            {"plastic_strain": np.array([0.02])})
-    tool = (corners[[0, 1, 3, 2]] + [0, 0, 1.2], np.array([[0, 1, 2, 3]]), np.array([0.01, 0, 0]))
+    soil = (corners, cells, {"displacement": 0.01 * corners},
+            {"plastic_strain": np.full(len(cells), 0.02)})
+    tool = (corners[[0, 1, 3, 2]] + [0, 0, 1.2], faces, np.array([0.01, 0, 0]))
     assert draw_in_subprocess(soil, tool, "lb, in", tmp_path / "soil-3d.png") == ""
     assert imread(tmp_path / "soil-3d.png").shape[:2] == (650, 1000)
     assert not (tmp_path / "soil-3d.npz").exists()

@@ -18,12 +18,15 @@ DRAWN_DISPLACEMENT = 0.03
 #: Equivalent plastic strain above which a cell is drawn as yielded soil (a tenth of the
 #: largest where that is smaller).
 YIELDED = 0.01
+#: pyvista's cell of a soil cell and of a tool face, by their number of nodes.
+SOLIDS = {8: "HEXAHEDRON", 4: "TETRA"}
+FACES = {4: "QUAD", 3: "TRIANGLE"}
 
 
 def soil_3d_png(soil, tool, length, path):
-    """``soil``: (points, hexahedra, point data, cell data) of the last frame (displacement on
-    the nodes, plastic_strain on the cells); ``tool``: (points, quadrilaterals, its
-    displacement (3,)); drawn on the initial mesh warped by a stated factor; ``length``: the
+    """``soil``: (points, hexahedra or tetrahedra, point data, cell data) of the last frame
+    (displacement on the nodes, plastic_strain on the cells); ``tool``: (points,
+    quadrilaterals or triangles, its displacement (3,)); drawn on the initial mesh warped by a stated factor; ``length``: the
     coordinates' unit."""
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")   # skip X
     import pyvista as pv
@@ -32,7 +35,7 @@ def soil_3d_png(soil, tool, length, path):
     extent = np.ptp(points, axis=0).max()
     largest = np.abs(u).max()
     scale = DRAWN_DISPLACEMENT * extent / largest if largest > 0 else 1.0
-    grid = pv.UnstructuredGrid({pv.CellType.HEXAHEDRON: cells}, points)
+    grid = pv.UnstructuredGrid({getattr(pv.CellType, SOLIDS[cells.shape[1]]): cells}, points)
     grid.point_data["displacement"] = u
     strain = cell_data["plastic_strain"]
     grid.cell_data["plastic_strain"] = strain
@@ -48,8 +51,9 @@ def soil_3d_png(soil, tool, length, path):
                          scalar_bar_args={"title": "plastic strain", "vertical": True,
                                           "position_x": 0.88, "position_y": 0.2, "fmt": "%.2g",
                                           "title_font_size": 16, "label_font_size": 14})
-    tool_points, quads, tool_u = tool
-    plotter.add_mesh(pv.UnstructuredGrid({pv.CellType.QUAD: quads}, tool_points + scale * tool_u),
+    tool_points, faces, tool_u = tool
+    plotter.add_mesh(pv.UnstructuredGrid({getattr(pv.CellType, FACES[faces.shape[1]]): faces},
+                                         tool_points + scale * tool_u),
                      color="firebrick", show_edges=True, label="tool")
     plotter.show_bounds(xtitle=f"x (travel) [{length}]", ytitle=f"y [{length}]",
                         ztitle=f"z [{length}]", font_size=9, location="outer")

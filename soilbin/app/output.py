@@ -158,7 +158,8 @@ class FieldWriter:
     def picture(self):
         """(soil, tool) of the last frame for :func:`figures_3d.soil_3d_png` on rank 0, or
         None (no tool, a two-dimensional mesh, or displacement or plastic strain not written)."""
-        if self._tool is None or self.last is None or self._mesh.topology != "Hexahedron":
+        if self._tool is None or self.last is None or self._mesh.topology not in ("Hexahedron",
+                                                                                 "Tetrahedron"):
             return None
         _, _, point_data, cell_data = self.last
         if "displacement" not in point_data or "plastic_strain" not in cell_data:
