@@ -92,7 +92,7 @@ def ell(occ):
     (["mesh.tool_file=plate.step"], plate, "holds no closed solid"),
     (["mesh.tool_file=ell.step"], ell, "not symmetric about its mid-plane in y"),
     (["mesh.configuration=side_wall", "mesh.bin_width=1.5"], None,
-     "the tool reaches y = 2, beyond the bin's side: mesh.bin_width = 1.5 must be more"),
+     r"the tool reaches \|y\| = 2, beyond the bin's side: mesh.bin_width = 1.5 must be more"),
     (["mesh.tool_depth=10"], None, "the tool's top lies 2 below the surface"),
     (["mesh.element_size=0.1", "mesh.growth=1.01"], None,
      r"about 5.27e\+06 tetrahedra; accepted: at most 1e\+06"),

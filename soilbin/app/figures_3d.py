@@ -26,8 +26,8 @@ FACES = {4: "QUAD", 3: "TRIANGLE"}
 def soil_3d_png(soil, tool, length, path):
     """``soil``: (points, hexahedra or tetrahedra, point data, cell data) of the last frame
     (displacement on the nodes, plastic_strain on the cells); ``tool``: (points,
-    quadrilaterals or triangles, its displacement (3,)); drawn on the initial mesh warped by a stated factor; ``length``: the
-    coordinates' unit."""
+    quadrilaterals or triangles, its displacement (3,)); drawn on the initial mesh warped by
+    a stated factor; ``length``: the coordinates' unit."""
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")   # skip X
     import pyvista as pv
     points, cells, point_data, cell_data = soil

@@ -25,10 +25,11 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
 from ..params import Params, param
 from .builder import Builder, check_proportions, length_param
-
 
 
 class Configuration(enum.Enum):
@@ -102,8 +103,8 @@ class CadToolParams(Params):
         return -math.radians(90.0 - self.rake_angle)
 
     def size(self, distance):
-        """The element length at ``distance`` from the tool."""
-        return min(self.element_size + (self.growth - 1.0) * distance, self.far_size)
+        """The element length at ``distance`` (an array) from the tool."""
+        return np.minimum(self.element_size + (self.growth - 1.0) * distance, self.far_size)
 
     @property
     def far_size(self) -> float:

@@ -28,7 +28,7 @@ def geometry(p: CadToolParams, simplices: bool):
     configuration = Configuration(p.configuration)
     full = configuration is Configuration.FULL
     y_min = -p.bin_width if full else 0.0
-    _check_fits(p, (y_min, p.bin_width), (y0, y1), z1)
+    _check_fits(p, full, (y0, y1), z1)
     if configuration is Configuration.EMBEDDED:
         _check_symmetric(tool, p.tool_file)
     _check_cell_count(p, (x0, y0, z0, x1, y1, z1), length, y_min)
@@ -111,12 +111,13 @@ def _bounds(tool):
     return tuple(np.where(np.abs(vertex - box) <= tolerance, vertex, box))
 
 
-def _check_fits(p: CadToolParams, sides, span, top):
-    """The tool, placed, within the bin's ``sides`` in y, and reaching up through the
-    surface."""
-    if span[1] >= sides[1] or (sides[0] < 0.0 and span[0] <= sides[0]):
-        raise InputError(f"mesh.tool_file = {p.tool_file!r}: the tool reaches y = "
-                         f"{span[1]:.4g}, beyond the bin's side: mesh.bin_width = "
+def _check_fits(p: CadToolParams, full, span, top):
+    """The tool, placed (``span`` in y, its ``top``), within the bin's width (to both sides
+    if ``full``), and reaching up through the surface."""
+    reach = max(span[1], -span[0]) if full else span[1]
+    if reach >= p.bin_width:
+        raise InputError(f"mesh.tool_file = {p.tool_file!r}: the tool reaches |y| = "
+                         f"{reach:.4g}, beyond the bin's side: mesh.bin_width = "
                          f"{p.bin_width:g} must be more")
     if top <= 0.0:
         raise InputError(f"mesh.tool_file = {p.tool_file!r}: the tool's top lies "
@@ -151,8 +152,7 @@ def _check_cell_count(p: CadToolParams, box, length, y_min):
                           indexing="ij")
     distance = np.sqrt(sum(np.maximum(np.maximum(lo - c, c - hi), 0.0) ** 2
                            for c, lo, hi in [(x, x0, x1), (y, y0, y1), (z, z0, z1)]))
-    size = np.minimum(p.element_size + (p.growth - 1.0) * distance, p.far_size)
-    cells = CELLS_PER_CUBE * np.mean(size ** -3.0) * length * (p.bin_width - y_min) * p.bin_depth
+    cells = CELLS_PER_CUBE * np.mean(p.size(distance) ** -3.0) * length * (p.bin_width - y_min) * p.bin_depth
     if cells > MAX_CELLS:
         raise InputError(f"mesh.element_size = {p.element_size:g} and growth = {p.growth:g} "
                          f"give about {cells:.3g} tetrahedra; accepted: at most {MAX_CELLS:g}")
