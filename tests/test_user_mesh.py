@@ -66,25 +66,8 @@ def test_an_unstructured_tetrahedral_block_collapses_at_the_mohr_coulomb_stress(
     """A user's tetrahedra (gmsh's Delaunay, no structure) serve the simplex elements: the
     block's stress is uniform, so tet10-bbar reaches the closed form as the hexahedra do."""
     from soilbin.app.run import run_scene
-    gmsh.initialize(readConfigFiles=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        box = gmsh.model.occ.addBox(0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
-        gmsh.model.occ.synchronize()
-        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.6)
-        gmsh.model.addPhysicalGroup(3, [box], 1)
-        gmsh.model.setPhysicalName(3, 1, "soil")
-        for tag, (name, box_min, box_max) in enumerate([
-                ("base", (-1, -1, -1e-6), (2, 2, 1e-6)), ("top", (-1, -1, 1 - 1e-6), (2, 2, 2)),
-                ("xmin", (-1e-6, -1, -1), (1e-6, 2, 2)), ("ymin", (-1, -1e-6, -1), (2, 1e-6, 2))],
-                start=2):
-            faces = [t for _, t in gmsh.model.getEntitiesInBoundingBox(*box_min, *box_max, 2)]
-            gmsh.model.addPhysicalGroup(2, faces, tag)
-            gmsh.model.setPhysicalName(2, tag, name)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(tmp_path / "tetrahedra.msh"))
-    finally:
-        gmsh.finalize()
+    subprocess.run([sys.executable, str(ROOT / "scripts" / "make_user_mesh.py"),
+                    str(tmp_path / "tetrahedra.msh"), "--tetrahedra"], check=True)
     scene = load_scene(scene_file(tmp_path, tmp_path / "tetrahedra.msh",
                                   ("[regions]", '[analysis]\nelement = "tet10-bbar"\n\n[regions]'),
                                   ("steps = 20", "steps = 8")))
