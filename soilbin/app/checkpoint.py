@@ -31,11 +31,13 @@ from mpi4py import MPI
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
-from ..layout import CONTACT, DOFS, GLOBAL
+from ..layout import CONTACT, GLOBAL, CellLayout, gather_rows
 from ..solver.stepping import StepRecord
 from .interrupt import deferred
 
 FOLDER = "checkpoint"
+#: The stored arrays' prefix of the remeshing's state.
+REMESH = "remesh"
 #: Scene tables a resumed run may change: how it solves and what it writes and reports.
 FREE = ("title", "solver", "output", "headline")
 #: Tolerance of the same point of the mesh in two runs, relative to the mesh's size (its
@@ -43,78 +45,37 @@ FREE = ("title", "solver", "output", "headline")
 SAME_MESH = 1e-12
 
 
-class _Cells:
-    """This rank's cells by their input numbers, and the entities of each (``layout``)."""
-
-    def __init__(self, problem):
-        mesh = problem.mesh
-        cells = mesh.topology.index_map(mesh.topology.dim)
-        self.n_owned, self.n_global = cells.size_local, cells.size_global
-        n_local = cells.size_local + cells.num_ghosts
-        self.number = np.asarray(mesh.topology.original_cell_index)[:n_local]
-        self.tables, self.contact = problem.entities()
-        nodes = mesh.geometry.dofmap.array.reshape(n_local, -1)
-        self.centres = mesh.geometry.x[nodes].mean(axis=1)   # taken before the mesh moves
-
-    def by_cell(self, kind, values):
-        """(n_owned, k, ...): the values of each owned cell's entities."""
-        table, values = self.tables[kind], np.asarray(values)
-        if kind == DOFS:   # flat: by block
-            values = values.reshape(table.max(initial=-1) + 1, -1)
-        return values[table[:self.n_owned]]
-
-    def local(self, kind, stored):
-        """This rank's array (ghosts included) from the stored (n_global, k, ...) one."""
-        table = self.tables[kind]
-        out = np.empty((table.max(initial=-1) + 1,) + stored.shape[2:], dtype=stored.dtype)
-        out[table] = stored[self.number]
-        return out.ravel() if kind == DOFS else out
-
-
-def _gather_by_number(comm, numbers, values):
-    """On rank 0, (n_global, ...) with each rank's rows at their numbers; None elsewhere."""
-    numbers, values = comm.gather(numbers, root=0), comm.gather(values, root=0)
-    if comm.rank != 0:
-        return None
-    numbers = np.concatenate(numbers)
-    out = np.empty((len(numbers),) + values[0].shape[1:], dtype=values[0].dtype)
-    out[numbers] = np.concatenate(values)
-    return out
-
-
-def _gather_rows(comm, values):
-    """On rank 0, every rank's rows one after the other; None elsewhere."""
-    values = comm.gather(values, root=0)
-    return np.concatenate(values) if comm.rank == 0 else None
-
-
 class Checkpoints:
     """Writes a run folder's checkpoint after each converged step (collective)."""
 
-    def __init__(self, folder, problem, scene):
+    def __init__(self, folder, problem, scene, remeshing=None):
         self._path = Path(folder) / FOLDER
         self._problem, self._scene = problem, scene
         self._comm = problem.comm
-        self._cells = _Cells(problem)
-        self._centres = self._gather(self._cells.centres[:self._cells.n_owned])
+        self._remeshing = remeshing
+        self._cells = CellLayout(problem)
+        self._centres = self._cells.gather(self._cells.centres[:self._cells.n_owned])
 
-    def _gather(self, values):
-        return _gather_by_number(self._comm, self._cells.number[:self._cells.n_owned], values)
+    def remeshed(self, problem):
+        """The run goes on on ``problem``'s new mesh (its cells as the remesher made them)."""
+        self._problem, self._cells = problem, self._remeshing.layout
+        self._centres = self._cells.gather(self._cells.centres[:self._cells.n_owned])
 
     def _arrays(self):
         """The problem's state as stored (on rank 0; None elsewhere)."""
-        cells, comm = self._cells, self._comm
+        cells = self._cells
+        keys = None if cells.contact is None else gather_rows(self._comm, cells.contact)
+        state = cells.gather_state(self._problem.state())
+        if state is None:
+            return None
         arrays = {"centres": self._centres}
-        if cells.contact is not None:
-            arrays[f"{CONTACT}/keys"] = _gather_rows(comm, cells.contact)
-        for name, (kind, values) in self._problem.state().items():
-            if kind == GLOBAL:
-                arrays[f"{GLOBAL}/{name}"] = np.asarray(values)
-            elif kind == CONTACT:
-                arrays[f"{CONTACT}/{name}"] = _gather_rows(comm, np.asarray(values))
-            else:
-                arrays[f"{kind}/{name}"] = self._gather(cells.by_cell(kind, values))
-        return arrays if comm.rank == 0 else None
+        if keys is not None:
+            arrays[f"{CONTACT}/keys"] = keys
+        arrays.update({f"{kind}/{name}": values for name, (kind, values) in state.items()})
+        if self._remeshing is not None:
+            arrays.update({f"{REMESH}/{name}": values
+                           for name, values in self._remeshing.state().items()})
+        return arrays
 
     def write(self, records):
         comm = self._comm
@@ -129,6 +90,10 @@ class Checkpoints:
                 np.savez(f, **arrays)
             steps = {"scene": self._scene.resolved(),
                      "steps": [dataclasses.asdict(r) for r in records]}
+            if self._remeshing is not None and self._remeshing.mesh_file is not None:
+                tagged = self._problem.tagged
+                steps["mesh"] = {"file": self._remeshing.mesh_file,
+                                 "regions": tagged.regions, "boundaries": tagged.boundaries}
             (new / "steps.json").write_text(json.dumps(steps) + "\n")
             if self._path.exists():
                 self._path.rename(old)
@@ -138,19 +103,27 @@ class Checkpoints:
 
 @dataclasses.dataclass(frozen=True)
 class Checkpoint:
-    """A checkpoint read back: the steps taken and the stored state."""
+    """A checkpoint read back: the steps taken and the stored state; ``mesh``: the file (in
+    the run folder) and group tags of the remeshed mesh the run was on, or None."""
     folder: Path
     records: tuple
     arrays: dict
+    mesh: dict = None
+
+    def remeshing_state(self):
+        """The remeshing's :meth:`~soilbin.remesh.Remeshing.state`."""
+        return {key.partition("/")[2]: values for key, values in self.arrays.items()
+                if key.startswith(f"{REMESH}/")}
 
     def _mismatch(self, what):
         return InputError(f"--resume {self.folder}: the mesh differs from the checkpoint's "
                           f"({what}; a different gmsh version or mesh file?)")
 
-    def restore(self, problem):
-        """Put ``problem`` (built from the same scene, not yet stepped) at the checkpoint's
-        last step; InputError (on every rank) if its mesh is not the checkpoint's."""
-        cells, arrays = _Cells(problem), self.arrays
+    def restore(self, problem, layout=None):
+        """Put ``problem`` (built from the same scene, or on the remeshed mesh, not yet
+        stepped; ``layout``: its cells', if taken already) at the checkpoint's last step;
+        InputError (on every rank) if its mesh is not the checkpoint's."""
+        cells, arrays = layout or CellLayout(problem), self.arrays
         if len(arrays["centres"]) != cells.n_global:
             raise self._mismatch(f"{cells.n_global} cells, not {len(arrays['centres'])}")
         scale = np.abs(arrays["centres"]).max()
@@ -164,7 +137,7 @@ class Checkpoint:
             raise self._mismatch("cells or contact points elsewhere")
         for key, values in arrays.items():
             kind, _, name = key.partition("/")
-            if not name or name == "keys":
+            if not name or name == "keys" or kind == REMESH:
                 continue
             state[name] = (values if kind == GLOBAL else values[contact] if kind == CONTACT
                            else cells.local(kind, values))
@@ -223,4 +196,4 @@ def read(folder, scene):
                          f"{', '.join(changed)} (only {', '.join(FREE)} may change)")
     records = tuple(StepRecord(**{**r, "residuals": tuple(r["residuals"])})
                     for r in steps["steps"])
-    return Checkpoint(folder, records, arrays)
+    return Checkpoint(folder, records, arrays, steps.get("mesh"))

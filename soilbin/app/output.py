@@ -25,6 +25,8 @@ from .xdmf import XdmfSeries
 CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure", "lift",
                  "front_volumetric_strain", "mesh_quality", "newton_iterations", "cuts", "wall_s")
 OBSERVED = ("pressure", "lift", "front_volumetric_strain", "mesh_quality")
+#: The file of the remeshes' reports (a remeshing run).
+REMESHES = "remeshes.csv"
 #: The XDMF topology of each cell the soil's meshes and the tool's faces are made of.
 XDMF_CELLS = {CellType.hexahedron: "Hexahedron", CellType.quadrilateral: "Quadrilateral",
               CellType.tetrahedron: "Tetrahedron", CellType.triangle: "Triangle"}
@@ -37,7 +39,8 @@ def curve_columns(problem):
 #: Written into fields.xdmf and tool.xdmf (XML Information and HDF5 attributes).
 CONVENTIONS = {
     "time": "the load factor (0: the initial state, 1: the full load)",
-    "mesh": "the initial configuration; warp it by 'displacement' to see the deformed one",
+    "mesh": "the initial configuration (of a remeshed grid: where its nodes' soil was at the "
+            "start); warp it by 'displacement' to see the deformed one",
     "displacement": "total displacement from the initial configuration [length]",
     "stress": "Cauchy stress, cell average, tension positive (compression negative) "
               "[force/area]",
@@ -57,11 +60,12 @@ def _gather(comm, array):
 
 class MeshData:
     """The soil mesh as one process writes it: the nodes of the P1 displacement space in
-    global order and in the scene's three coordinates, its cells (VTK node order, their XDMF
+    global order and in the scene's three coordinates (less the P1 ``displacement`` where
+    given: a remeshed mesh's nodes where its soil was at the start), its cells (VTK node order, their XDMF
     :attr:`topology`), and any field's node or cell values (a vector of a
     two-dimensional mesh with its y component 0)."""
 
-    def __init__(self, point_space):
+    def __init__(self, point_space, displacement=None):
         mesh = point_space.mesh
         self.comm = mesh.comm
         self._dim = mesh.geometry.dim
@@ -75,6 +79,8 @@ class MeshData:
         self.topology = XDMF_CELLS[cell_type]
         perm = perm_vtk(cell_type, self._cell_nodes.shape[1])
         x = point_space.tabulate_dof_coordinates()[:self._owned, :self._dim]
+        if displacement is not None:   # a mesh made in the deformed configuration
+            x = x - displacement.x.array.reshape(-1, self._dim)[:self._owned]
         self.points = _gather(self.comm, x @ embedding(self._dim).T)
         self.cells = _gather(self.comm, cells.reshape(-1, self._cell_nodes.shape[1])[:, perm])
 
@@ -121,11 +127,15 @@ def tool_surface(problem):
 
 class FieldWriter:
     """fields.xdmf (the soil's named output fields) and, with a tool, tool.xdmf (its faces,
-    displaced rigidly); frame 0 is the initial state. Rank 0 writes."""
+    displaced rigidly); frame 0 is the initial state. Rank 0 writes. ``remeshed``: the
+    problem is on a mesh a remesh made (its nodes are written where their soil was at the
+    start)."""
 
-    def __init__(self, folder, problem, fields):
+    def __init__(self, folder, problem, fields, remeshed=False):
+        self._names = fields
         self._fields = problem.output_fields(fields)
-        self._mesh = MeshData(problem.displacement().function_space)
+        displacement = problem.displacement()
+        self._mesh = MeshData(displacement.function_space, displacement if remeshed else None)
         rank0 = problem.comm.rank == 0
         self._soil = (XdmfSeries(folder / "fields.xdmf", self._mesh.points, self._mesh.cells,
                                  self._mesh.topology, CONVENTIONS) if rank0 else None)
@@ -138,6 +148,14 @@ class FieldWriter:
                                         CONVENTIONS)
                 self._tool_mesh = (points, cells)
         self.last = None   # (points, cells, point data, cell data) of the last frame, rank 0
+
+    def remeshed(self, problem):
+        """The frames from here on are on ``problem``'s new mesh (collective)."""
+        self._fields = problem.output_fields(self._names)
+        displacement = problem.displacement()
+        self._mesh = MeshData(displacement.function_space, displacement)
+        if self._soil is not None:
+            self._soil.new_mesh(self._mesh.points, self._mesh.cells)
 
     def write(self, t, tool_travel=0.0):
         point_data, cell_data = {}, {}
@@ -171,7 +189,7 @@ class RunFolder:
     """One folder per run (made and cleared beforehand: :mod:`soilbin.app.outdir`). Only rank 0
     writes files; writing fields is collective."""
 
-    def __init__(self, path, problem, scene):
+    def __init__(self, path, problem, scene, initial_frame=True):
         self.path = Path(path)
         self._rank0 = problem.comm.rank == 0
         self._columns = curve_columns(problem)
@@ -180,13 +198,27 @@ class RunFolder:
             with open(self.path / "curve.csv", "w", newline="") as f:
                 csv.writer(f).writerow(self._columns)
         self._moves_tool = scene.loading.boundary == TOOL
-        self.fields = (FieldWriter(self.path, problem, scene.output.fields)
+        self.fields = (FieldWriter(self.path, problem, scene.output.fields,
+                                   remeshed=not initial_frame)
                        if scene.output.fields else None)
-        if self.fields is not None:
+        if self.fields is not None and initial_frame:
             self.fields.write(0.0)
         self._every = scene.output.every
         self._stops = scene.output.stops(scene.loading)
         self.records = []   # the converged steps, in order
+
+    def remeshed(self, problem, report):
+        """The run goes on on ``problem``'s new mesh (collective): ``report`` (a
+        :class:`~soilbin.remesh.remesher.RemeshReport`) becomes a row of remeshes.csv."""
+        if self.fields is not None:
+            self.fields.remeshed(problem)
+        if self._rank0:
+            row = dataclasses.asdict(report)
+            path = self.path / REMESHES
+            with deferred(), open(path, "a", newline="") as f:
+                if not path.stat().st_size:
+                    csv.writer(f).writerow(row)
+                csv.writer(f).writerow([_text(v) for v in row.values()])
 
     def add_earlier(self, records):
         """The steps of the run this one resumes: their curve.csv rows (no fields)."""

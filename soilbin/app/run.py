@@ -1,5 +1,6 @@
 """Run a scene: mesh, problem, load stepping, outputs and the summary."""
 import dataclasses
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -9,7 +10,10 @@ from mpi4py import MPI
 from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
 from ..errors import InputError
 from ..meshes import scene_mesh
+from ..layout import CellLayout
 from ..problem import SoilProblem
+from ..remesh import RemeshError, Remeshing
+from ..remesh.mesher import read_mesh
 from ..records.scene import Headline
 from ..solver.stepping import StepperResult, run_load_steps
 from . import checkpoint, figures, figures_3d, interrupt, section_figures
@@ -18,6 +22,27 @@ from .insitu import check_initial_stress
 from .outdir import prepare_on_rank0
 from .output import RunFolder
 
+
+
+class _Current:
+    """The load stepper's problem: the run's, which a remesh replaces."""
+
+    def __init__(self, problem):
+        self.problem = problem
+
+    def __getattr__(self, name):
+        return getattr(self.problem, name)
+
+
+def resumed_mesh(comm, earlier, out_dir):
+    """The remeshed mesh a checkpoint was on, read from its run folder and copied into this
+    run's (so that this run can be resumed in turn)."""
+    source = Path(earlier.folder) / earlier.mesh["file"]
+    if comm.rank == 0:
+        target = Path(out_dir) / earlier.mesh["file"]
+        target.parent.mkdir(exist_ok=True)
+        shutil.copyfile(source, target)
+    return read_mesh(comm, source, earlier.mesh["regions"], earlier.mesh["boundaries"])
 
 
 def folded_at_step(records):
@@ -132,23 +157,39 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
                          "folder keeps the steps before the resume)")
     earlier = checkpoint.read(resume, scene) if resume is not None else None
     out_dir = prepare_on_rank0(comm, out_dir)
+    remeshing = Remeshing(scene, out_dir) if scene.remesh.active else None
+    remeshed = earlier is not None and earlier.mesh is not None
     with interrupt.kept():
-        tagged = scene_mesh(scene, comm)
+        tagged = (scene_mesh(scene, comm) if not remeshed else
+                  resumed_mesh(comm, earlier, out_dir))
     check_initial_stress(scene, tagged)
     problem = SoilProblem(scene, tagged)
     problem.newton.on_iterate = iterate_progress
-    folder = RunFolder(out_dir, problem, scene)
-    checkpoints = checkpoint.Checkpoints(out_dir, problem, scene)
-    if earlier is not None:
+    if remeshed:   # the remeshed mesh as made, then moved by the steps after the remesh
+        remeshing.restore(earlier.remeshing_state(), earlier.mesh["file"], CellLayout(problem))
+        earlier.restore(problem, remeshing.layout)
+    folder = RunFolder(out_dir, problem, scene, initial_frame=not remeshed)
+    checkpoints = checkpoint.Checkpoints(out_dir, problem, scene, remeshing)
+    if remeshed:
+        checkpoints.remeshed(problem)
+    elif earlier is not None:
         earlier.restore(problem)
+        if remeshing is not None:
+            remeshing.restore(earlier.remeshing_state(), None, None)
+    if earlier is not None:
         folder.add_earlier(earlier.records)
     setup_s = time.perf_counter() - start
+    stepped = _Current(problem)
 
     stops = scene.output.stops(scene.loading)
     sections = problem.tool is not None and not problem.disc.planar   # cuts through the soil
 
     def on_step(record):
         folder.add_step(record)
+        if remeshing is not None and remeshing.due(record):   # the step ends on the new mesh
+            stepped.problem = remeshing.remesh(stepped.problem, record)
+            folder.remeshed(stepped.problem, remeshing.reports[-1])
+            checkpoints.remeshed(stepped.problem)
         checkpoints.write(folder.records)
         if comm.rank == 0 and record.step == folded_at_step(folder.records):
             print(f"soilbin: warning: step {record.step}: a cell of the mesh has folded over "
@@ -164,13 +205,18 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     loading = scene.loading
     interrupted = None
     try:
-        result = run_load_steps(problem, loading.steps, loading.max_cuts, on_step, stops=stops,
+        result = run_load_steps(stepped, loading.steps, loading.max_cuts, on_step, stops=stops,
                                 limit=collapse_limit(scene), first_cuts=loading.first_cuts,
                                 resume=folder.records)
     except interrupt.Interrupted as signal:
         interrupted = signal
         result = StepperResult(tuple(folder.records), False,
                                f"{signal}; the converged steps are in {out_dir}")
+    except RemeshError as err:
+        result = StepperResult(tuple(folder.records), False,
+                               f"{err}; the converged steps and the last good mesh are in "
+                               f"{out_dir}")
+    problem = stepped.problem
     if interrupted is not None:
         status = "interrupted"
     elif result.complete:
@@ -190,7 +236,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
         "status": status,
         "converged": status in ("complete", "collapse"),
         "message": result.message,
-        "n_cells": tagged.mesh.topology.index_map(tagged.mesh.topology.dim).size_global,
+        "n_cells": problem.mesh.topology.index_map(problem.mesh.topology.dim).size_global,
         "n_dofs": problem.n_dofs,
         "n_ranks": comm.size,
         "n_steps": len(records),
@@ -204,6 +250,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
         "cpu_s": round(time.process_time() - start_cpu, 3),
         **headline_results(scene, records),
         **mesh_quality_results(records),
+        **({} if remeshing is None else {"remeshes": remeshing.count}),
     }
     try:
         estimates = draft_estimates(scene)

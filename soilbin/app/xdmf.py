@@ -29,27 +29,36 @@ def _data_item(array, ref):
 
 
 class XdmfSeries:
-    """Frames of point and cell fields on one fixed mesh; ``information``: name -> text,
-    written into the XML and onto every HDF5 file (e.g. the sign convention)."""
+    """Frames of point and cell fields on a mesh (a new one after a remesh, :meth:`new_mesh`);
+    ``information``: name -> text, written into the XML and onto every HDF5 file (e.g. the
+    sign convention)."""
 
     def __init__(self, path, points, cells, topology_type, information):
         self.path = Path(path)
         self.folder = self.path.parent / FRAMES_DIR
-        self.n_points = len(points)
         self.folder.mkdir(exist_ok=True)
         self._name = self.path.stem
         self._info = dict(information)
-        mesh_file = f"{self._name}-mesh.h5"
+        self._topology_type = topology_type
+        self._meshes = 0
+        self._frames = []
+        self.new_mesh(points, cells)
+
+    def new_mesh(self, points, cells):
+        """The frames from here on are on this mesh (after a remesh): its own HDF5 file,
+        ``NAME-mesh.h5`` for the first, ``NAME-mesh-1.h5``, ... for the next."""
+        self.n_points = len(points)
+        mesh_file = f"{self._name}-mesh{f'-{self._meshes}' if self._meshes else ''}.h5"
+        self._meshes += 1
         self._write_h5(mesh_file, {"points": np.asarray(points, dtype=float),
                                    "cells": np.asarray(cells, dtype=np.int64)})
         shape_points, shape_cells = np.shape(points), np.shape(cells)
         self._mesh_xml = (
-            f'<Topology TopologyType="{topology_type}" NumberOfElements="{shape_cells[0]}" '
-            f'NodesPerElement="{shape_cells[1]}">'
+            f'<Topology TopologyType="{self._topology_type}" '
+            f'NumberOfElements="{shape_cells[0]}" NodesPerElement="{shape_cells[1]}">'
             + _data_item(np.empty(shape_cells, np.int64), f"{FRAMES_DIR}/{mesh_file}:/cells")
             + '</Topology><Geometry GeometryType="XYZ">'
             + _data_item(np.empty(shape_points), f"{FRAMES_DIR}/{mesh_file}:/points") + "</Geometry>")
-        self._frames = []
 
     def _write_h5(self, name, arrays):
         with h5py.File(self.folder / name, "w") as f:

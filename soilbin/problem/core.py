@@ -15,6 +15,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
+from ..errors import ConvergenceError
 from ..forms.discretisation import Discretisation
 from ..layout import DOFS, GLOBAL, NODES, POINTS
 from ..records.scene import TOOL
@@ -140,8 +141,18 @@ class SoilProblem:
                 self.border.set_value(last + ratio * (last - before))
 
     def solve(self):
-        """Equilibrium at the current load factor, starting from the last committed state."""
-        return self.newton.solve()
+        """Equilibrium at the current load factor, starting from the last committed state.
+        A remeshing run (scene ``[remesh]``) refuses a solution that takes the mesh's quality
+        below half ``remesh.min_quality`` (or folds a cell over), as a ConvergenceError: the
+        stepper cuts the step, and the remesher never meets a folded or flattened cell."""
+        result = self.newton.solve()
+        remesh = self.scene.remesh
+        if remesh.active:
+            quality = self.quality.minimum(self.kinematics.node_increment())
+            if quality <= remesh.min_quality / 2.0:
+                raise ConvergenceError(f"the step takes the mesh's least scaled Jacobian to "
+                                       f"{quality:.3g}, below half remesh.min_quality")
+        return result
 
     def commit(self):
         self._factors = (self._factor, self._factors[0])

@@ -148,6 +148,10 @@ class UpdatedLagrangian(_Extrapolated):
     def displacement_p1(self):
         return self._motion.total
 
+    def node_increment(self):
+        """The iterate's increment at the mesh's nodes, (n_nodes, dim): where it would move them."""
+        return self._motion.node_increment()
+
     def state(self):
         """The extrapolation's increment and the mesh's position."""
         return {**super().state(), **self._motion.state()}
@@ -190,9 +194,18 @@ class MeshMotion:
         else:
             self._reset = slice(None)
 
+    def _increment(self):
+        return self._disc.in_mesh_axes(self._w.x.array[self._vertex_dofs])
+
+    def node_increment(self):
+        """(n_nodes, dim): the increment at each node of the mesh's geometry."""
+        out = np.zeros((len(self._x), self._disc.dimension))
+        out[self._nodes] = self._increment()[self._dofs]
+        return out
+
     def advance(self):
         dim = self._disc.dimension
-        du = self._disc.in_mesh_axes(self._w.x.array[self._vertex_dofs])
+        du = self._increment()
         self._x[self._nodes, :dim] = self._x[self._nodes, :dim] + du[self._dofs]
         self.total.x.array[:] += du.ravel()
         self._w.x.array[self._reset] = 0.0

@@ -34,11 +34,13 @@ class MeshQuality:
         nodes = mesh.geometry.dofmap.array.reshape(-1, mesh.geometry.dofmap.offsets[1])
         corners = dim + 1 if self._simplex else 2 ** dim
         self._corners = nodes[:owned, :corners]   # vertices first, in the reference order
+        self._moved = None
         self._orientation = np.sign(np.linalg.det(self._jacobian()))
 
     def _coordinates(self):
         dim = self.mesh.topology.dim
-        return self.mesh.geometry.x[self._corners][:, :, :dim]
+        x = self.mesh.geometry.x[self._corners][:, :, :dim]
+        return x if self._moved is None else x + self._moved[self._corners]
 
     def _jacobian(self):
         """(n, dim, dim) derivative of the cell's map: a simplex's, or the (bi/tri)linear
@@ -74,7 +76,12 @@ class MeshQuality:
             least = np.minimum(least, np.linalg.det(edges) / lengths)
         return least
 
-    def minimum(self):
-        """The least cell quality of the whole mesh; collective."""
-        local = self.cells().min(initial=np.inf)
+    def minimum(self, moved=None):
+        """The least cell quality of the whole mesh, or of the mesh with its nodes ``moved``
+        (n_nodes, dim) further; collective."""
+        self._moved = moved
+        try:
+            local = self.cells().min(initial=np.inf)
+        finally:
+            self._moved = None
         return float(self.mesh.comm.allreduce(local, op=MPI.MIN))

@@ -256,6 +256,19 @@ class Output(Params):
 
 
 @dataclasses.dataclass(frozen=True)
+class Remesh(Params):
+    min_quality: float = param(0.0, lo=0.0, hi=1.0, hi_open=True,
+                               doc="remesh after a converged step whose least scaled Jacobian "
+                                   "(mesh_quality in curve.csv) is below this (0: never)")
+    every: int = param(0, lo=0, doc="remesh after every this many converged steps as well "
+                                    "(0: only by min_quality)")
+
+    @property
+    def active(self):
+        return self.min_quality > 0.0 or self.every > 0
+
+
+@dataclasses.dataclass(frozen=True)
 class Scene:
     path: Path
     title: str
@@ -273,6 +286,7 @@ class Scene:
     tool: Tool = None
     tractions: tuple = ()
     geostatic: Geostatic = None
+    remesh: Remesh = Remesh()
 
     @property
     def name(self):
@@ -298,6 +312,8 @@ class Scene:
                 "headline": {k: table(v) for k, v in self.headline.items()}}
         if self.geostatic is not None:
             data["geostatic"] = table(self.geostatic)
+        if self.remesh.active:
+            data["remesh"] = table(self.remesh)
         if self.tool is not None:
             data["tool"] = {"faces": self.tool.faces, "bonded": self.tool.bonded}
             if self.tool.interface is not None:
@@ -307,10 +323,10 @@ class Scene:
         return toml_out.dumps(data)
 
 
-OPTIONAL_TABLES = ("analysis", "solver", "output")   # all defaults: --set may create them
+OPTIONAL_TABLES = ("analysis", "solver", "output", "remesh")   # all defaults: --set may create them
 TOP_LEVEL = ("title", "units", "mesh", "regions", "materials", "supports", "loading",
              "analysis", "solver", "output", "headline", "tool", "tractions",
-             "geostatic")
+             "geostatic", "remesh")
 
 
 def _model_name(model):
@@ -453,6 +469,9 @@ def _parse(raw, path):
                          "is a multiplier of the displacement's equation (a saddle point, no such "
                          "energy): use 'bt' or 'basic'")
     output = from_table(Output, raw.get("output", {}), "output")
+    remesh = from_table(Remesh, raw.get("remesh", {}), "remesh")
+    if remesh.active:
+        _check_remesh(builder.dimension(mesh), analysis, regions, tool)
     for i, value in enumerate(output.at):
         if not 0.0 < value <= loading.magnitude:
             raise InputError(f"output.at[{i}] = {value!r} is outside (0, loading.magnitude = "
@@ -461,7 +480,22 @@ def _parse(raw, path):
                  materials=materials, regions=dict(regions), supports=supports, loading=loading,
                  analysis=analysis, solver=solver,
                  output=output,
-                 headline=headline, tool=tool, tractions=tractions, geostatic=geostatic)
+                 headline=headline, tool=tool, tractions=tractions, geostatic=geostatic,
+                 remesh=remesh)
+
+
+def _check_remesh(dimension, analysis, regions, tool):
+    """Remeshing meshes the deformed soil afresh: the soil moves with the mesh (large
+    deformation), and the remesher takes one soil region of a two-dimensional mesh."""
+    if not analysis.large_deformation:
+        raise InputError("[remesh] needs analysis.large_deformation = true (in small strain the "
+                         "mesh does not move)")
+    if dimension != 2:
+        raise InputError("[remesh]: remeshing takes two-dimensional (plane-strain) meshes; this "
+                         "scene's mesh is three-dimensional")
+    if len(regions) != 1 or tool is not None or any(analysis.frame_rotation):
+        raise InputError("[remesh]: remeshing takes one soil region, no [tool] and no "
+                         "analysis.frame_rotation")
 
 
 def _check_dimension(dimension, analysis, supports, tractions, loading):

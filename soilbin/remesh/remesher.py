@@ -1,0 +1,241 @@
+"""A large-deformation run's remeshing: when the mesh's quality falls below the scene's
+``remesh.min_quality`` after a converged step (or every ``remesh.every`` steps), the deformed
+soil is meshed afresh, its state moved over, and the new problem brought back to equilibrium
+at the same load before the next step.
+
+State by ``layout`` kind (the problem's :meth:`~soilbin.problem.SoilProblem.state`): the
+quadrature points' history and tangent by the cell-wise fit of :mod:`.transfer`; the total
+displacement (of the mesh's nodes from the initial configuration) likewise from the old
+corners; the unknowns start from zero (the increment of the next step; a mean-dilatation
+element's pressure from the transferred mean stress); the load factor, the driven boundary's
+state and the force scale unchanged. The re-equilibration is one Newton solve at that load
+factor with the return map, which takes a transferred stress outside its yield surface back to
+it; its first and last residuals are reported with the soil's volume and its integral of the
+equivalent plastic strain before and after.
+"""
+import dataclasses
+import time
+from pathlib import Path
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from mpi4py import MPI
+from scipy.spatial import cKDTree
+
+from ..errors import ConvergenceError
+from ..layout import GLOBAL, NODES, POINTS, CellLayout
+from ..problem import SoilProblem
+from ..problem.loads import start_mean_pressure
+from ..solver.quadrature import quadrature_space
+from .mesher import Sizes, mesh_outline
+from .outline import OutlineError, gather_outline, initial_sizes
+from .transfer import QUADRILATERAL_TRIANGLES, OldCells
+
+#: The run folder's folder of the meshes that remeshing made.
+MESHES = "meshes"
+
+
+class RemeshError(RuntimeError):
+    """A remesh that failed: the mesher, the transfer or the re-equilibration."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RemeshReport:
+    """What one remesh did (``remeshes.csv``): after ``step``, the cells before and after, the
+    equilibrium residual (of the run's force scale) after the transfer and after the
+    re-equilibration with its Newton iterations, the driven force before and after, the
+    relative change of the soil's volume and of its integral of the equivalent plastic strain,
+    the least scaled Jacobian before and after, and the seconds spent."""
+    step: int
+    load_factor: float
+    cells_before: int
+    cells_after: int
+    residual_transferred: float
+    residual_equilibrated: float
+    newton_iterations: int
+    force_before: float
+    force_after: float
+    volume_change: float
+    plastic_strain_change: float
+    quality_before: float
+    quality_after: float
+    wall_s: float
+
+
+class Remeshing:
+    """Decides when the run remeshes and makes the new problem (collective); each new mesh is
+    written to the run folder's ``meshes/remesh-STEP.msh``."""
+
+    def __init__(self, scene, folder):
+        self.scene, self.folder = scene, Path(folder)
+        #: the run folder's file of the mesh the run is on, None while on the scene's own
+        self.mesh_file = None
+        #: the new mesh's cells and their entities as the mesh was made (a checkpoint's
+        #: layout: the re-equilibration moves the mesh before the first checkpoint on it)
+        self.layout = None
+        self.settings = scene.remesh
+        self.reports = []   # this run's (not those before a resume)
+        self.count = 0      # remeshes since the start, a resumed run's before it included
+        self._last = 0      # the step of the last remesh
+        #: Rank 0: each cell's element size as the scene's mesh had it where the cell's soil
+        #: was (by input cell number; None until the first remesh, which reads the built
+        #: mesh's cells). Carried from mesh to mesh, so that sizes do not drift by remeshing.
+        self._sizes = None
+
+    def due(self, record):
+        """Whether to remesh after this converged step."""
+        quality = record.columns.get("mesh_quality", 1.0)
+        every = self.settings.every
+        return (quality < self.settings.min_quality
+                or (every > 0 and record.step - self._last >= every))
+
+    def remesh(self, problem, record):
+        """The problem on a new mesh of the deformed soil, in equilibrium at ``record``'s load
+        factor; RemeshError (on every rank) if that cannot be done."""
+        start = time.perf_counter()
+        before = soil_integrals(problem)
+        try:
+            new = self._transferred(problem, record.step)
+        except (OutlineError, RuntimeError) as err:
+            raise RemeshError(f"remeshing after step {record.step} failed: {err}") from None
+        transferred = soil_integrals(new)
+        new.set_load_factor(record.load_factor)
+        try:
+            result = new.solve()
+        except ConvergenceError as err:
+            raise RemeshError(f"after remeshing at step {record.step} the soil did not come back "
+                              f"to equilibrium at the same load ({err})") from None
+        new.commit()
+        seen = new.observe()
+        scale = new.newton.force_scale or 1.0
+        report = RemeshReport(
+            step=record.step, load_factor=record.load_factor,
+            cells_before=_cells(problem), cells_after=_cells(new),
+            residual_transferred=result.residuals[0] / scale,
+            residual_equilibrated=result.residuals[-1] / scale,
+            newton_iterations=result.iterations,
+            force_before=record.force, force_after=seen.force,
+            volume_change=transferred[0] / before[0] - 1.0,
+            plastic_strain_change=(transferred[1] / before[1] - 1.0 if before[1] else 0.0),
+            quality_before=record.columns.get("mesh_quality", float("nan")),
+            quality_after=seen.columns.get("mesh_quality", float("nan")),
+            wall_s=time.perf_counter() - start)
+        self.reports.append(report)
+        self._last = record.step
+        self.count += 1
+        return new
+
+    def _transferred(self, old, step):
+        """A new problem on a fresh mesh of ``old``'s deformed soil, with its state."""
+        comm, tagged, scene = old.comm, old.tagged, self.scene
+        element = old.disc.element
+        outline = gather_outline(tagged)
+        layout = CellLayout(old)
+        state = layout.gather_state(old.state())
+        samples = layout.gather(layout.by_cell(POINTS, _point_coordinates(old)))
+        sizes = None
+        if comm.rank == 0:
+            corners = state["kinematics/mesh_x"][1][:, :, :2]
+            if self._sizes is None:
+                initial = corners - state["kinematics/total_displacement"][1][:, :, :2]
+                self._sizes = initial_sizes(corners, initial, element.simplex)
+            sizes, at_vertices = _size_field(corners, self._sizes, element.simplex, outline)
+            # full-quad recombination halves the boundary's segments: sample it twice as long
+            outline = outline.resampled(at_vertices * (1.0 if element.simplex else 2.0))
+        mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
+        new_tagged = mesh_outline(comm, outline, sizes, dict(tagged.regions),
+                                  dict(tagged.boundaries), element.simplex,
+                                  self.folder / mesh_file)
+        self.mesh_file = mesh_file
+        new = SoilProblem(scene, new_tagged)
+        new.newton.on_iterate = old.newton.on_iterate
+        self.layout = new_layout = CellLayout(new)
+        target = new_layout.gather_state(new.state())
+        x = new_layout.gather(new_layout.by_cell(POINTS, _point_coordinates(new)))
+        if comm.rank == 0:
+            self._sizes = _transfer(state, target, samples, x, element, self._sizes)
+        target = comm.bcast(target, root=0)
+        new.restore({name: values if kind == GLOBAL else new_layout.local(kind, values)
+                     for name, (kind, values) in target.items()})
+        if element.mixed:
+            start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
+        return new
+
+
+    # -- checkpoints ------------------------------------------------------------------
+    def state(self):
+        """What a checkpoint keeps of the remeshing (rank 0's arrays): name -> array."""
+        state = {"last": np.asarray(self._last), "count": np.asarray(self.count)}
+        if self._sizes is not None:
+            state["sizes"] = self._sizes
+        return state
+
+    def restore(self, state, mesh_file, layout):
+        """Back to a checkpoint's :meth:`state`, on the mesh of ``mesh_file`` (None: the
+        scene's) with its ``layout`` as made."""
+        self._last, self.count = int(state["last"]), int(state["count"])
+        self._sizes = state.get("sizes")
+        self.mesh_file, self.layout = mesh_file, layout
+
+
+def _transfer(state, target, samples, points, element, sizes):
+    """Fill ``target`` (the new problem's gathered state) from ``state`` (the old one's), on
+    rank 0: ``samples`` (n_old, q, 2) are the old quadrature points, ``points`` (n_new, q, 2)
+    the new ones. Returns the new cells' sizes: ``sizes`` (of the old cells) of the old cell
+    each new cell's centre lies in."""
+    old = OldCells(state["kinematics/mesh_x"][1][:, :, :2], element.simplex)
+    at_points = old.locate(points.reshape(-1, 2))
+    new_corners = target["kinematics/mesh_x"][1]
+    at_nodes = old.locate(new_corners[:, :, :2].reshape(-1, 2))
+    for name, (kind, values) in target.items():
+        if kind == GLOBAL:
+            target[name] = state[name]
+        elif kind == POINTS and name != "points/converged_tangent":
+            moved = old.at_points(samples, state[name][1], at_points)
+            target[name] = (kind, moved.reshape(values.shape))
+    total = state["kinematics/total_displacement"][1]
+    moved = old.at_nodes(total, at_nodes)
+    target["kinematics/total_displacement"] = (NODES, moved.reshape(new_corners.shape))
+    _, holding = old.locate(new_corners[:, :, :2].mean(axis=1))
+    return sizes[old.parent[holding]]
+
+
+def _size_field(corners, sizes, simplices, outline):
+    """(:class:`~.mesher.Sizes` over the old cells, each corner the mean initial size of the
+    cells around it; that size at each vertex of the outline)."""
+    flat = corners.reshape(-1, 2)
+    nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
+    total, count = np.zeros(len(nodes)), np.zeros(len(nodes))
+    np.add.at(total, inverse, np.repeat(sizes, corners.shape[1]))
+    np.add.at(count, inverse, 1.0)
+    at_node = total / count
+    at_corner = at_node[inverse].reshape(corners.shape[:2])
+    split = [(0, 1, 2)] if simplices else QUADRILATERAL_TRIANGLES
+    triangles = np.concatenate([corners[:, list(t)] for t in split])
+    values = np.concatenate([at_corner[:, list(t)] for t in split])
+    _, vertex = cKDTree(nodes).query(outline.vertices)   # the outline's vertices are old nodes
+    return Sizes(triangles, values), at_node[vertex]
+
+
+def _point_coordinates(problem):
+    """(n_points, 2): where this rank's quadrature points are now."""
+    points = problem.points
+    return points.evaluate(points.expression(ufl.SpatialCoordinate(problem.mesh)))[:, :2]
+
+
+def soil_integrals(problem):
+    """(volume, ∫ equivalent plastic strain dV) of the soil in its current configuration
+    (collective)."""
+    points, disc = problem.points, problem.disc
+    plastic = fem.Function(quadrature_space(problem.mesh, disc.element.quadrature_degree))
+    points.write(points.history("eps_p_eq"), plastic)
+    dx = disc.measure()
+    one = fem.Constant(problem.mesh, 1.0)
+    return tuple(problem.comm.allreduce(fem.assemble_scalar(fem.form(f * dx)), op=MPI.SUM)
+                 for f in (one, plastic))
+
+
+def _cells(problem):
+    mesh = problem.mesh
+    return mesh.topology.index_map(mesh.topology.dim).size_global

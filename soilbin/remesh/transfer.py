@@ -1,0 +1,93 @@
+"""The soil's state moved from the old mesh to the new one, on rank 0.
+
+Quadrature data: each old cell's values at its points become one linear polynomial of the
+current coordinates, fitted by least squares through them (three terms through the 2 x 2
+Gauss points of a quadrilateral, the three of a quadratic triangle's rule, ...); a new point
+takes the polynomial of the old cell it lies in, evaluated there: the cell-wise recovery of the
+RITSS method (Hu and Randolph 1998, "A practical numerical approach for large deformation
+problems in soil", IJNAMG 22, 327-350), which keeps a field's gradient inside a cell and
+smooths nothing across cells. Nodal data (the total displacement): linear interpolation of the
+old nodes' values over the old cells cut into triangles (exact at the old nodes, continuous).
+A point is found in the old cells cut into triangles (affine, so no inverse map of a distorted
+quadrilateral can fail); a point that no old cell holds (round-off at the boundary) takes its
+nearest cell. Fields that a return map keeps on a yield surface are not kept there by the fit:
+the re-equilibration (:mod:`.remesher`) returns them.
+"""
+import numpy as np
+import ufl
+from dolfinx import fem, geometry
+from dolfinx.mesh import create_mesh
+from mpi4py import MPI
+
+#: A DOLFINx quadrilateral's corners as two triangles.
+QUADRILATERAL_TRIANGLES = ((0, 1, 3), (0, 3, 2))
+
+
+class OldCells:
+    """The old mesh on rank 0 alone, cut into triangles, to find points in: ``corners``
+    (n, k, 2), the old cells' corners in the DOLFINx order, in the input cell order."""
+
+    def __init__(self, corners, simplex):
+        split = [(0, 1, 2)] if simplex else QUADRILATERAL_TRIANGLES
+        self._pieces = len(split)
+        flat = corners.reshape(-1, 2)
+        self._nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
+        self._node_of = inverse.reshape(corners.shape[:2])
+        # triangle j of cell c is row c * pieces + j
+        triangles = np.stack([self._node_of[:, list(t)] for t in split], axis=1).reshape(-1, 3)
+        domain = ufl.Mesh(ufl.VectorElement("Lagrange", "triangle", 1))
+        self.mesh = create_mesh(MPI.COMM_SELF, triangles.astype(np.int64), self._nodes, domain)
+        #: the old cell (input number) of each triangle of :attr:`mesh`
+        self.parent = np.asarray(self.mesh.topology.original_cell_index) // self._pieces
+        self._tree = geometry.BoundingBoxTree(self.mesh, 2)
+        self._midpoints = None
+
+    def locate(self, points):
+        """(points as 3-vectors, the triangle of :attr:`mesh` holding each point (m, 2)); the
+        nearest triangle where none does."""
+        x = np.column_stack([points, np.zeros(len(points))])
+        candidates = geometry.compute_collisions(self._tree, x)
+        colliding = geometry.compute_colliding_cells(self.mesh, candidates, x)
+        offsets = colliding.offsets
+        found = offsets[1:] > offsets[:-1]
+        cells = np.full(len(points), -1, dtype=np.int32)
+        cells[found] = colliding.array[offsets[:-1][found]]
+        if not found.all():
+            if self._midpoints is None:
+                self._midpoints = geometry.create_midpoint_tree(
+                    self.mesh, 2, np.arange(len(self.parent), dtype=np.int32))
+            cells[~found] = geometry.compute_closest_entity(self._tree, self._midpoints,
+                                                            self.mesh, x[~found])
+        return x, cells
+
+    def at_points(self, samples, values, located):
+        """Values (n, q, ...) of every old cell at its points ``samples`` (n, q, 2), fitted
+        linearly (module doc) and evaluated at ``located`` (:meth:`locate`'s); (m, ...)."""
+        n, q = values.shape[:2]
+        shape = values.shape[2:]
+        centre = samples.mean(axis=1, keepdims=True)
+        basis = np.concatenate([np.ones((n, q, 1)), samples - centre], axis=2)   # (n, q, 3)
+        normal = np.einsum("nqa,nqb->nab", basis, basis)
+        right = np.einsum("nqa,nqk->nak", basis, values.reshape(n, q, -1))
+        coefficients = np.linalg.solve(normal, right)                           # (n, 3, k)
+        x, triangles = located
+        cell = self.parent[triangles]
+        local = np.concatenate([np.ones((len(x), 1)), x[:, :2] - centre[cell, 0]], axis=1)
+        return np.einsum("ma,mak->mk", local, coefficients[cell]).reshape((len(x),) + shape)
+
+    def at_nodes(self, values, located):
+        """Values (n, k, ...) at every old cell's corners, interpolated linearly over the
+        triangles and evaluated at ``located``; (m, ...)."""
+        shape = values.shape[2:]
+        k = int(np.prod(shape, dtype=int))
+        per_node = np.empty((len(self._nodes), k))
+        per_node[self._node_of.ravel()] = values.reshape(-1, k)
+        space = (fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=k) if k > 1 else
+                 fem.FunctionSpace(self.mesh, ("Lagrange", 1)))
+        field = fem.Function(space)
+        geometry_nodes = self.mesh.geometry.dofmap.array.reshape(-1, 3)
+        node = np.asarray(self.mesh.geometry.input_global_indices)[geometry_nodes]
+        dofs = space.dofmap.list.array.reshape(-1, 3)
+        field.x.array.reshape(-1, k)[dofs] = per_node[node]
+        x, cells = located
+        return field.eval(x, cells).reshape((len(x),) + shape)

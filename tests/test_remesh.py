@@ -1,0 +1,143 @@
+"""Remeshing a large-deformation run (scene ``[remesh]``): the deformed soil's outline, the
+transfer of the state to the new mesh, and a run that remeshes and resumes."""
+import csv
+from xml.etree import ElementTree
+
+import meshio
+import numpy as np
+import pytest
+
+from conftest import SCENES
+from soilbin.app.run import run_scene
+from soilbin.errors import InputError
+from soilbin.records.scene import load_scene
+from soilbin.remesh.outline import chain
+from soilbin.remesh.transfer import OldCells
+from test_checkpoint import curve, stop_and_resume
+
+#: The footing pushed 0.06 in into the soil on a coarse mesh, remeshed every 3 steps and
+#: where the mesh's quality falls below 0.3.
+FOOTING = ("mesh.edge_size=0.05", "loading.magnitude=0.06", "loading.steps=6",
+           "loading.first_cuts=0", "remesh.every=3")
+
+
+def distorted_quadrilaterals():
+    """Corners (n, 4, 2) of a sheared, graded 4 x 3 grid of quadrilaterals (DOLFINx order)."""
+    xs, zs = np.array([0.0, 0.3, 0.7, 1.2, 2.0]), np.array([0.0, 0.4, 0.9, 1.5])
+    cells = []
+    for j in range(3):
+        for i in range(4):
+            corners = [(xs[i + a] + 0.2 * zs[j + b] ** 2, zs[j + b] + 0.1 * xs[i + a])
+                       for b in (0, 1) for a in (0, 1)]
+            cells.append(corners)
+    return np.array(cells)
+
+
+def test_a_linear_field_is_transferred_exactly():
+    """The cell-wise linear fit through the quadrature points and the nodal interpolation both
+    reproduce a linear field at any point of the old mesh."""
+    corners = distorted_quadrilaterals()
+    old = OldCells(corners, simplex=False)
+    field = lambda x: np.stack([1.0 + 2.0 * x[..., 0] - 3.0 * x[..., 1],
+                                0.5 * x[..., 0] + x[..., 1]], axis=-1)
+    weights = np.array([[0.2, 0.3, 0.1, 0.4], [0.6, 0.1, 0.2, 0.1], [0.1, 0.1, 0.4, 0.4],
+                        [0.3, 0.3, 0.3, 0.1]])   # four points inside each cell
+    samples = np.einsum("pk,nkd->npd", weights, corners)
+    rng = np.random.default_rng(1)
+    targets = np.einsum("mk,mkd->md", rng.dirichlet(np.ones(4), 200),
+                        corners[rng.integers(0, len(corners), 200)])
+    located = old.locate(targets)
+    assert np.allclose(old.at_points(samples, field(samples), located), field(targets),
+                       rtol=0.0, atol=1e-12)
+    assert np.allclose(old.at_nodes(field(corners), located), field(targets), rtol=0.0,
+                       atol=1e-12)
+
+
+def test_the_outline_is_one_counter_clockwise_polygon_cut_where_its_group_changes():
+    square = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [1, 1], [0, 1]], dtype=float)
+    edges = np.stack([square, np.roll(square, -1, axis=0)], axis=1)
+    tags = np.array([5, 5, 6, 7, 7, 8])
+    order = np.random.default_rng(0).permutation(6)
+    edges = edges[order]
+    edges[::2] = edges[::2, ::-1]   # some edges the other way round
+    outline = chain(edges, tags[order])
+    x, z = outline.vertices.T
+    assert 0.5 * (np.dot(x, np.roll(z, -1)) - np.dot(np.roll(x, -1), z)) == pytest.approx(2.0)
+    runs = outline.runs()
+    assert sorted(tag for tag, _, _ in runs) == [5, 6, 7, 8]
+    assert sum(last - first for _, first, last in runs) == 6
+    for tag, first, last in runs:   # each run's edges lie on its side of the rectangle
+        assert (outline.tags[first:last] == tag).all()
+
+
+def test_resampling_keeps_the_corners_and_the_area_of_a_straight_sided_outline():
+    square = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [1, 1], [0, 1]], dtype=float)
+    edges = np.stack([square, np.roll(square, -1, axis=0)], axis=1)
+    outline = chain(edges, np.array([5, 5, 6, 7, 7, 8]))
+    fine = outline.resampled(np.full(6, 0.1))
+    assert len(fine.vertices) == 60
+    for corner in ([0, 0], [2, 0], [2, 1], [0, 1]):
+        assert np.isclose(fine.vertices, corner).all(axis=1).any()
+    x, z = fine.vertices.T
+    assert 0.5 * (np.dot(x, np.roll(z, -1)) - np.dot(np.roll(x, -1), z)) == pytest.approx(2.0)
+    coarse = outline.resampled(np.full(6, 10.0))   # a vertex kept at every corner
+    assert len(coarse.vertices) == 4
+
+
+@pytest.mark.parametrize("element", ["quad4-bbar", "tri6-bbar"])
+def test_a_remeshed_footing_comes_back_to_equilibrium_with_its_state(tmp_path, element):
+    scene = load_scene(SCENES / "strip-footing-penetration.toml",
+                       [*FOOTING, f"analysis.element={element}"])
+    summary = run_scene(scene, tmp_path)
+    assert summary["status"] == "complete" and summary["remeshes"] >= 2
+    with open(tmp_path / "remeshes.csv") as f:
+        reports = list(csv.DictReader(f))
+    assert len(reports) == summary["remeshes"]
+    for report in reports:
+        assert float(report["residual_transferred"]) < 0.1          # of the force scale
+        assert float(report["residual_equilibrated"]) <= 1e-6        # the scene's floor
+        assert abs(float(report["volume_change"])) < 1e-4
+        assert abs(float(report["plastic_strain_change"])) < 0.02
+        assert float(report["quality_after"]) > 0.5                  # a good mesh again
+        assert float(report["force_after"]) == pytest.approx(float(report["force_before"]),
+                                                            rel=0.03)
+    pressures = [row["pressure"] for row in curve(tmp_path)]
+    assert 80.0 < pressures[-1] < 100.0   # near (2 + pi) c = 89.98 at 3% of B
+
+
+def test_each_mesh_is_a_grid_of_fields_xdmf_and_a_gmsh_file(tmp_path):
+    summary = run_scene(load_scene(SCENES / "strip-footing-penetration.toml",
+                                   [*FOOTING, "output.every=1"]), tmp_path)
+    grids = ElementTree.parse(tmp_path / "fields.xdmf").getroot().iter("Grid")
+    meshes = set()
+    for grid in grids:
+        if grid.get("GridType") != "Uniform":
+            continue
+        points = grid.find("Geometry/DataItem")
+        displacement = grid.find("Attribute[@Name='displacement']/DataItem")
+        assert points.get("Dimensions") == displacement.get("Dimensions")
+        meshes.add(points.text)
+    assert len(meshes) == summary["remeshes"] + 1
+    files = sorted((tmp_path / "meshes").iterdir())
+    assert len(files) == summary["remeshes"]
+    assert all(set(meshio.read(name).cells_dict) == {"quad", "line"} for name in files)
+
+
+def test_a_run_stopped_after_a_remesh_resumes_on_the_new_mesh(tmp_path):
+    (whole, whole_curve), (resumed, resumed_curve) = stop_and_resume(
+        tmp_path, "strip-footing-penetration", FOOTING, 4)
+    assert resumed["status"] == whole["status"] == "complete"
+    assert resumed["remeshes"] == whole["remeshes"]
+    assert resumed["newton_iterations"] == whole["newton_iterations"]
+    for mine, theirs in zip(resumed_curve, whole_curve):
+        assert mine == pytest.approx(theirs, rel=1e-12, abs=1e-14)
+
+
+@pytest.mark.parametrize("overrides, words", [
+    (["analysis.large_deformation=false"], "needs analysis.large_deformation = true"),
+    (["mesh.dimension=3", "analysis.element=hex8-bbar"], "two-dimensional"),
+    (["remesh.min_quality=1.5"], "remesh.min_quality"),
+])
+def test_remeshing_a_scene_it_cannot_is_refused_on_reading(overrides, words):
+    with pytest.raises(InputError, match=words):
+        load_scene(SCENES / "strip-footing-penetration.toml", overrides)
