@@ -29,6 +29,10 @@ def curve(path):
                                       "loading.steps=2", "loading.first_cuts=0",
                                       "loading.until_collapse=false", "output.at=[]",
                                       "output.fields=[]") for arg in ("--set", key)]),
+    # remeshing: rank 0 meshes the outline and moves the state, the new mesh is partitioned
+    ("strip-footing-penetration", [arg for key in ("mesh.edge_size=0.05", "loading.magnitude=0.1",
+                                                   "loading.steps=10", "remesh.every=4")
+                                   for arg in ("--set", key)]),
 ])
 @pytest.mark.slow
 def test_two_ranks_match_serial(tmp_path, scene, overrides):

@@ -11,10 +11,12 @@ from ..errors import InputError
 
 #: What ``soilbin run`` writes into its folder (file patterns, and the folder of field frames).
 RUN_FILES = ("scene.toml", "curve.csv", "curve.png", "summary.json", "fields.xdmf", "fields.h5",
-             "tool.xdmf", "tool-section.png", "sections-*.png", "soil-3d.png", "traceback*.txt")
+             "tool.xdmf", "tool-section.png", "sections-*.png", "soil-3d.png", "traceback*.txt",
+             "remeshes.csv")
 FRAMES_DIR = "fields"
-#: Folders a run writes: its checkpoint (``app.checkpoint``), also while one replaces another.
-RUN_FOLDERS = (FRAMES_DIR, "checkpoint", "checkpoint.new", "checkpoint.old")
+#: Folders a run writes: its checkpoint (``app.checkpoint``), also while one replaces another,
+#: and the meshes a remeshing run made.
+RUN_FOLDERS = (FRAMES_DIR, "checkpoint", "checkpoint.new", "checkpoint.old", "meshes")
 
 
 def prepare(path):

@@ -56,7 +56,7 @@ def mesh_outline(comm, outline, sizes, regions, boundaries, simplices, path):
             gmsh.option.setNumber("Mesh.RecombineAll", 1)
         _generate()
         check_cells(RuntimeError, "the remesher made", 2, simplices)
-        path.parent.mkdir(exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
         gmsh.option.setNumber("Mesh.Binary", 1)   # the coordinates to the last bit
         gmsh.write(str(path))
         return regions, {g: t for g, t in boundaries.items()}

@@ -96,8 +96,12 @@ def chain(edges, tags):
     x, z = vertices.T
     if np.dot(x, np.roll(z, -1)) - np.dot(np.roll(x, -1), z) < 0.0:   # clockwise: turn it round
         vertices, edge_tags = vertices[::-1], np.roll(edge_tags[::-1], -1)
-    start = np.flatnonzero(edge_tags != np.roll(edge_tags, 1))
-    shift = int(start[0]) if len(start) else 0
+    # start at the run start (or vertex) lowest in x, then z: the same polygon whatever the
+    # order the edges came in (ranks gather them in another)
+    starts = np.flatnonzero(edge_tags != np.roll(edge_tags, 1))
+    if not len(starts):
+        starts = np.arange(len(vertices))
+    shift = int(starts[np.lexsort(vertices[starts].T[::-1])[0]])
     return Outline(np.roll(vertices, -shift, axis=0), np.roll(edge_tags, -shift))
 
 

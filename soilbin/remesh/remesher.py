@@ -32,6 +32,10 @@ from .mesher import Sizes, mesh_outline
 from .outline import OutlineError, gather_outline, initial_sizes
 from .transfer import QUADRILATERAL_TRIANGLES, OldCells
 
+#: gmsh's input rounded to this fraction of the mesh's extent: the mesh a remesh makes must
+#: not depend on round-off (partitioned runs sum their forces in another order, and gmsh's
+#: Delaunay and recombination decide differently on points a rounding apart).
+GRAIN = 1e-9
 #: The run folder's folder of the meshes that remeshing made.
 MESHES = "meshes"
 
@@ -46,7 +50,9 @@ class RemeshReport:
     equilibrium residual (of the run's force scale) after the transfer and after the
     re-equilibration with its Newton iterations, the driven force before and after, the
     relative change of the soil's volume and of its integral of the equivalent plastic strain,
-    the least scaled Jacobian before and after, and the seconds spent."""
+    the least scaled Jacobian before and after, and the seconds spent: meshing (the outline
+    gathered, gmsh, the mesh distributed), the new problem with its transferred state, the
+    re-equilibration, and all of it."""
     step: int
     load_factor: float
     cells_before: int
@@ -60,6 +66,9 @@ class RemeshReport:
     plastic_strain_change: float
     quality_before: float
     quality_after: float
+    mesh_s: float
+    transfer_s: float
+    equilibrium_s: float
     wall_s: float
 
 
@@ -96,10 +105,11 @@ class Remeshing:
         start = time.perf_counter()
         before = soil_integrals(problem)
         try:
-            new = self._transferred(problem, record.step)
+            new, mesh_s = self._transferred(problem, record.step)
         except (OutlineError, RuntimeError) as err:
             raise RemeshError(f"remeshing after step {record.step} failed: {err}") from None
         transferred = soil_integrals(new)
+        transfer_s = time.perf_counter() - start - mesh_s
         new.set_load_factor(record.load_factor)
         try:
             result = new.solve()
@@ -120,6 +130,8 @@ class Remeshing:
             plastic_strain_change=(transferred[1] / before[1] - 1.0 if before[1] else 0.0),
             quality_before=record.columns.get("mesh_quality", float("nan")),
             quality_after=seen.columns.get("mesh_quality", float("nan")),
+            mesh_s=mesh_s, transfer_s=transfer_s,
+            equilibrium_s=time.perf_counter() - start - mesh_s - transfer_s,
             wall_s=time.perf_counter() - start)
         self.reports.append(report)
         self._last = record.step
@@ -127,7 +139,9 @@ class Remeshing:
         return new
 
     def _transferred(self, old, step):
-        """A new problem on a fresh mesh of ``old``'s deformed soil, with its state."""
+        """A new problem on a fresh mesh of ``old``'s deformed soil, with its state, and the
+        seconds the mesh took."""
+        start = time.perf_counter()
         comm, tagged, scene = old.comm, old.tagged, self.scene
         element = old.disc.element
         outline = gather_outline(tagged)
@@ -140,14 +154,22 @@ class Remeshing:
             if self._sizes is None:
                 initial = corners - state["kinematics/total_displacement"][1][:, :, :2]
                 self._sizes = initial_sizes(corners, initial, element.simplex)
+            grain = GRAIN * np.abs(corners).max()
+            corners = _rounded(corners, grain)
+            state["kinematics/mesh_x"][1][:, :, :2] = corners
+            outline = dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain))
             sizes, at_vertices = _size_field(corners, self._sizes, element.simplex, outline)
+            sizes = dataclasses.replace(sizes, values=_rounded(sizes.values, grain))
             # full-quad recombination halves the boundary's segments: sample it twice as long
-            outline = outline.resampled(at_vertices * (1.0 if element.simplex else 2.0))
+            outline = outline.resampled(_rounded(at_vertices, grain)
+                                        * (1.0 if element.simplex else 2.0))
+            outline = dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain))
         mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
         new_tagged = mesh_outline(comm, outline, sizes, dict(tagged.regions),
                                   dict(tagged.boundaries), element.simplex,
                                   self.folder / mesh_file)
         self.mesh_file = mesh_file
+        mesh_s = time.perf_counter() - start
         new = SoilProblem(scene, new_tagged)
         new.newton.on_iterate = old.newton.on_iterate
         self.layout = new_layout = CellLayout(new)
@@ -160,7 +182,7 @@ class Remeshing:
                      for name, (kind, values) in target.items()})
         if element.mixed:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
-        return new
+        return new, mesh_s
 
 
     # -- checkpoints ------------------------------------------------------------------
@@ -216,6 +238,11 @@ def _size_field(corners, sizes, simplices, outline):
     values = np.concatenate([at_corner[:, list(t)] for t in split])
     _, vertex = cKDTree(nodes).query(outline.vertices)   # the outline's vertices are old nodes
     return Sizes(triangles, values), at_node[vertex]
+
+
+def _rounded(x, grain):
+    """``x`` on a grid of ``grain``."""
+    return np.round(x / grain) * grain
 
 
 def _point_coordinates(problem):
