@@ -242,6 +242,13 @@ def _progress(record):
           + (f"  (last cut: {record.cut_reason})" if record.cuts else ""), file=sys.stderr, flush=True)
 
 
+def _remesh_progress(report):
+    print(f"  remeshed after step {report.step}: {report.cells_before} -> {report.cells_after} "
+          f"cells, quality {report.quality_before:.3g} -> {report.quality_after:.3g}, force "
+          f"{report.force_before:.5g} -> {report.force_after:.5g} ({report.newton_iterations} "
+          f"Newton), {report.wall_s:.2f} s", file=sys.stderr, flush=True)
+
+
 class _IterateProgress:
     """A line per Newton iterate on stderr (rank 0's): residual, target, seconds since the
     last line and the peak resident memory summed over the ranks. Called on every rank (the
@@ -273,6 +280,7 @@ def _run(args):
     try:
         quiet = args.json or not rank0
         summary = run_scene(scene, out, progress=None if quiet else _progress,
+                            remesh_progress=None if quiet else _remesh_progress,
                             overrides=args.overrides, resume=args.resume,
                             iterate_progress=_IterateProgress(comm)
                             if args.verbose and not args.json else None)

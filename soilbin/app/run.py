@@ -143,13 +143,13 @@ def draft_estimates(scene):
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), resume=None,
-              iterate_progress=None):
+              iterate_progress=None, remesh_progress=None):
     """Solve ``scene``, writing into ``out_dir`` (checked writable and cleared of an older
     run before the mesh is built); returns the summary dict (``overrides``: the --set items
     the scene was loaded with, echoed in it). ``progress(record)`` is called after each
     converged step, ``iterate_progress(iteration, residual, target)`` at each Newton
-    iterate. ``resume``: a stopped run's folder to go on from (its checkpoint,
-    ``app.checkpoint``). SIGINT or SIGTERM during the steps ends the run with status
+    iterate, ``remesh_progress(report)`` after a step's remesh. ``resume``: a stopped run's
+    folder to go on from (its checkpoint, ``app.checkpoint``). SIGINT or SIGTERM during the steps ends the run with status
     "interrupted" (summary written, no collective call after it)."""
     start, start_cpu = time.perf_counter(), time.process_time()
     if resume is not None and Path(resume).resolve() == Path(out_dir).resolve():
@@ -186,9 +186,11 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
 
     def on_step(record):
         folder.add_step(record)
+        remeshed = None
         if remeshing is not None and remeshing.due(record):   # the step ends on the new mesh
             stepped.problem = remeshing.remesh(stepped.problem, record)
-            folder.remeshed(stepped.problem, remeshing.reports[-1])
+            remeshed = remeshing.reports[-1]
+            folder.remeshed(stepped.problem, remeshed)
             checkpoints.remeshed(stepped.problem)
         checkpoints.write(folder.records)
         if comm.rank == 0 and record.step == folded_at_step(folder.records):
@@ -201,6 +203,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
             section_figures.sections_png(problem, scene, load, out_dir / f"sections-{load:g}.png")
         if progress is not None:
             progress(record)
+        if remeshed is not None and remesh_progress is not None:
+            remesh_progress(remeshed)
 
     loading = scene.loading
     interrupted = None
