@@ -53,6 +53,17 @@ def test_a_linear_field_is_transferred_exactly():
                        atol=1e-12)
 
 
+def test_one_point_per_cell_is_transferred_as_its_cell_value():
+    """A reduced rule (one Gauss point) fits no gradient: a new point takes its cell's value."""
+    corners = distorted_quadrilaterals()
+    old = OldCells(corners, simplex=False)
+    samples = corners.mean(axis=1, keepdims=True)
+    values = np.arange(len(corners), dtype=float)[:, None, None] * np.ones((1, 1, 2))
+    targets = np.einsum("k,nkd->nd", [0.1, 0.2, 0.3, 0.4], corners)   # one inside each cell
+    moved = old.at_points(samples, values, old.locate(targets))
+    assert np.array_equal(moved, values[:, 0])
+
+
 def test_the_outline_is_one_counter_clockwise_polygon_cut_where_its_group_changes():
     square = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [1, 1], [0, 1]], dtype=float)
     edges = np.stack([square, np.roll(square, -1, axis=0)], axis=1)

@@ -2,7 +2,8 @@
 
 Quadrature data: each old cell's values at its points become one linear polynomial of the
 current coordinates, fitted by least squares through them (three terms through the 2 x 2
-Gauss points of a quadrilateral, the three of a quadratic triangle's rule, ...); a new point
+Gauss points of a quadrilateral, the three of a quadratic triangle's rule, ...; the one
+point of a reduced rule gives the cell's value); a new point
 takes the polynomial of the old cell it lies in, evaluated there: the cell-wise recovery of the
 RITSS method (Hu and Randolph 1998, "A practical numerical approach for large deformation
 problems in soil", IJNAMG 22, 327-350), which keeps a field's gradient inside a cell and
@@ -69,7 +70,8 @@ class OldCells:
         basis = np.concatenate([np.ones((n, q, 1)), samples - centre], axis=2)   # (n, q, 3)
         normal = np.einsum("nqa,nqb->nab", basis, basis)
         right = np.einsum("nqa,nqk->nak", basis, values.reshape(n, q, -1))
-        coefficients = np.linalg.solve(normal, right)                           # (n, 3, k)
+        # least squares, or the cell's value with no gradient where one point (a reduced rule)
+        coefficients = np.linalg.pinv(normal) @ right                         # (n, 3, k)
         x, triangles = located
         cell = self.parent[triangles]
         local = np.concatenate([np.ones((len(x), 1)), x[:, :2] - centre[cell, 0]], axis=1)
