@@ -9,12 +9,12 @@ from mpi4py import MPI
 
 from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
 from ..errors import InputError
-from ..meshes import scene_mesh
 from ..layout import CellLayout
+from ..meshes import scene_mesh
 from ..problem import SoilProblem
+from ..records.scene import Headline
 from ..remesh import RemeshError, Remeshing
 from ..remesh.mesher import read_mesh
-from ..records.scene import Headline
 from ..solver.stepping import StepperResult, run_load_steps
 from . import checkpoint, figures, figures_3d, interrupt, section_figures
 from .collapse import collapse_limit, collapse_pressure
@@ -149,8 +149,9 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     the scene was loaded with, echoed in it). ``progress(record)`` is called after each
     converged step, ``iterate_progress(iteration, residual, target)`` at each Newton
     iterate, ``remesh_progress(report)`` after a step's remesh. ``resume``: a stopped run's
-    folder to go on from (its checkpoint, ``app.checkpoint``). SIGINT or SIGTERM during the steps ends the run with status
-    "interrupted" (summary written, no collective call after it)."""
+    folder to go on from (its checkpoint, ``app.checkpoint``). SIGINT or SIGTERM during the
+    steps ends the run with status "interrupted" (summary written, no collective call after
+    it)."""
     start, start_cpu = time.perf_counter(), time.process_time()
     if resume is not None and Path(resume).resolve() == Path(out_dir).resolve():
         raise InputError(f"--resume {resume}: give the resumed run another --out (this "

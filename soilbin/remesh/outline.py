@@ -1,5 +1,5 @@
 """The soil as it stands after a converged step, gathered on rank 0 for the remesher: its
-boundary as one closed polygon of tagged edges, and its cells' corners now and at the start."""
+boundary as one closed polygon of tagged edges, and its cells' sizes as they were built."""
 import dataclasses
 
 import numpy as np
@@ -28,7 +28,6 @@ class Outline:
         ends = list(change[1:]) + [len(self.tags)]
         return [(int(self.tags[a]), int(a), int(b)) for a, b in zip(change, ends)]
 
-
     def resampled(self, sizes, corner_angle=30.0):
         """The polygon with new vertices about ``sizes`` apart (the size at each vertex, linear
         along each edge): the ends of each run of one tag and the vertices where the
@@ -56,6 +55,7 @@ class Outline:
             vertices.append(np.column_stack([np.interp(at, s, x[:, 0]), np.interp(at, s, x[:, 1])]))
             tags.append(np.full(count, self.tags[a]))
         return Outline(np.concatenate(vertices), np.concatenate(tags))
+
 
 def gather_outline(tagged):
     """The tagged boundary edges of a two-dimensional mesh chained into an :class:`Outline`, on

@@ -4,9 +4,10 @@ soil is meshed afresh, its state moved over, and the new problem brought back to
 at the same load before the next step.
 
 State by ``layout`` kind (the problem's :meth:`~soilbin.problem.SoilProblem.state`): the
-quadrature points' history and tangent by the cell-wise fit of :mod:`.transfer`; the total
-displacement (of the mesh's nodes from the initial configuration) likewise from the old
-corners; the unknowns start from zero (the increment of the next step; a mean-dilatation
+quadrature points' stress and history by the cell-wise fit of :mod:`.transfer` (the first
+iterate's tangent is the new problem's elastic one: a fitted consistent tangent took more
+iterations); the total displacement (of the mesh's nodes from the initial configuration)
+interpolated from the old nodes; the unknowns start from zero (the increment of the next step; a mean-dilatation
 element's pressure from the transferred mean stress); the load factor, the driven boundary's
 state and the force scale unchanged. The re-equilibration is one Newton solve at that load
 factor with the return map, which takes a transferred stress outside its yield surface back to
@@ -150,20 +151,7 @@ class Remeshing:
         samples = layout.gather(layout.by_cell(POINTS, _point_coordinates(old)))
         sizes = None
         if comm.rank == 0:
-            corners = state["kinematics/mesh_x"][1][:, :, :2]
-            if self._sizes is None:
-                initial = corners - state["kinematics/total_displacement"][1][:, :, :2]
-                self._sizes = initial_sizes(corners, initial, element.simplex)
-            grain = GRAIN * np.abs(corners).max()
-            corners = _rounded(corners, grain)
-            state["kinematics/mesh_x"][1][:, :, :2] = corners
-            outline = dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain))
-            sizes, at_vertices = _size_field(corners, self._sizes, element.simplex, outline)
-            sizes = dataclasses.replace(sizes, values=_rounded(sizes.values, grain))
-            # full-quad recombination halves the boundary's segments: sample it twice as long
-            outline = outline.resampled(_rounded(at_vertices, grain)
-                                        * (1.0 if element.simplex else 2.0))
-            outline = dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain))
+            outline, sizes = self._mesher_input(state, outline, element.simplex)
         mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
         new_tagged = mesh_outline(comm, outline, sizes, dict(tagged.regions),
                                   dict(tagged.boundaries), element.simplex,
@@ -184,6 +172,21 @@ class Remeshing:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
         return new, mesh_s
 
+    def _mesher_input(self, state, outline, simplices):
+        """(the outline sampled at the sizes, the :class:`~.mesher.Sizes`) on rank 0, on the
+        grid of :data:`GRAIN` (the old corners in ``state`` too, for the transfer)."""
+        corners = state["kinematics/mesh_x"][1][:, :, :2]
+        if self._sizes is None:
+            initial = corners - state["kinematics/total_displacement"][1][:, :, :2]
+            self._sizes = initial_sizes(corners, initial, simplices)
+        grain = GRAIN * np.abs(corners).max()
+        corners = state["kinematics/mesh_x"][1][:, :, :2] = _rounded(corners, grain)
+        outline = dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain))
+        sizes, at_vertices = _size_field(corners, self._sizes, simplices, outline)
+        sizes = dataclasses.replace(sizes, values=_rounded(sizes.values, grain))
+        # full-quad recombination halves the boundary's segments: sample it twice as long
+        outline = outline.resampled(_rounded(at_vertices, grain) * (1.0 if simplices else 2.0))
+        return dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain)), sizes
 
     # -- checkpoints ------------------------------------------------------------------
     def state(self):
