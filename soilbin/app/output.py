@@ -61,8 +61,8 @@ def _gather(comm, array):
 class MeshData:
     """The soil mesh as one process writes it: the nodes of the P1 displacement space in
     global order and in the scene's three coordinates (less the P1 ``displacement`` where
-    given: a remeshed mesh's nodes where its soil was at the start), its cells (VTK node order, their XDMF
-    :attr:`topology`), and any field's node or cell values (a vector of a
+    given: a remeshed mesh's nodes where its soil was at the start), its cells (VTK node
+    order, their XDMF :attr:`topology`), and any field's node or cell values (a vector of a
     two-dimensional mesh with its y component 0)."""
 
     def __init__(self, point_space, displacement=None):

@@ -58,7 +58,8 @@ class XdmfSeries:
             f'NumberOfElements="{shape_cells[0]}" NodesPerElement="{shape_cells[1]}">'
             + _data_item(np.empty(shape_cells, np.int64), f"{FRAMES_DIR}/{mesh_file}:/cells")
             + '</Topology><Geometry GeometryType="XYZ">'
-            + _data_item(np.empty(shape_points), f"{FRAMES_DIR}/{mesh_file}:/points") + "</Geometry>")
+            + _data_item(np.empty(shape_points), f"{FRAMES_DIR}/{mesh_file}:/points")
+            + "</Geometry>")
 
     def _write_h5(self, name, arrays):
         with h5py.File(self.folder / name, "w") as f:

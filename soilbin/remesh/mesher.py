@@ -87,7 +87,7 @@ def _size_field(triangles, node_sizes):
     fields.setAsBackgroundMesh(field)
     for option, value in {"Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0,
                           "Mesh.MeshSizeFromCurvature": 0,
-                          "Mesh.Algorithm": 6,                  # Frontal-Delaunay (8 crashes in 4.8)
+                          "Mesh.Algorithm": 6,          # Frontal-Delaunay (8 crashes in 4.8)
                           "Mesh.RecombinationAlgorithm": 3}.items():   # Blossom full-quad
         gmsh.option.setNumber(option, value)
 

@@ -7,12 +7,12 @@ State by ``layout`` kind (the problem's :meth:`~soilbin.problem.SoilProblem.stat
 quadrature points' stress and history by the cell-wise fit of :mod:`.transfer` (the first
 iterate's tangent is the new problem's elastic one: a fitted consistent tangent took more
 iterations); the total displacement (of the mesh's nodes from the initial configuration)
-interpolated from the old nodes; the unknowns start from zero (the increment of the next step; a mean-dilatation
-element's pressure from the transferred mean stress); the load factor, the driven boundary's
-state and the force scale unchanged. The re-equilibration is one Newton solve at that load
-factor with the return map, which takes a transferred stress outside its yield surface back to
-it; its first and last residuals are reported with the soil's volume and its integral of the
-equivalent plastic strain before and after.
+interpolated from the old nodes; the unknowns start from zero (the increment of the next
+step; a mean-dilatation element's pressure from the transferred mean stress); the load
+factor, the driven boundary's state and the force scale unchanged. The re-equilibration is
+one Newton solve at that load factor with the return map, which takes a transferred stress
+outside its yield surface back to it; its first and last residuals are reported with the
+soil's volume and its integral of the equivalent plastic strain before and after.
 """
 import dataclasses
 import time
