@@ -1,10 +1,11 @@
 """An XDMF time series that a kill cannot corrupt (one process writes it; h5py, no FEniCSx).
 
 Layout: ``NAME.xdmf`` (XML) beside a folder holding ``NAME-mesh.h5`` (points
-and cells, written once) and one ``NAME-000003.h5`` per frame (every field of
-that frame). One temporal collection of uniform grids, each repeating the mesh
-and carrying all the frame's fields: the layout meshio's ``TimeSeriesReader``,
-ParaView's XDMF readers and pyvista read. A frame's HDF5 file is complete and
+and cells, written once; after a remesh ``NAME-mesh-1.h5``, ...) and one
+``NAME-000003.h5`` per frame (every field of that frame). One temporal
+collection of uniform grids, each naming its mesh and carrying all the frame's
+fields: the layout meshio's ``TimeSeriesReader`` (which reads the first grid's
+mesh only), ParaView's XDMF readers and pyvista read. A frame's HDF5 file is complete and
 closed before the XML naming it replaces the old XML atomically, so after a
 kill the series lists exactly the frames that are on disk, each readable.
 """
