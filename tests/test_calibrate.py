@@ -147,6 +147,7 @@ MCC_TESTS = (   # data, path, its keys, x, y, the leg measured
      "load"))
 
 
+@pytest.mark.slow
 def test_modified_cam_clay_lambda_kappa_m_from_drained_undrained_and_isotropic(tmp_path):
     """M through the critical-state friction angle phi (M = 6 sin phi / (3 - sin phi));
     every test from p = 100 on the normal compression line."""
@@ -251,6 +252,7 @@ def hydrostatic_with_unloading(table, rng, pressure=100.0):
                                     ("eps_v",), ("load", "unload"), rng, NOISE, leg_column=True)
 
 
+@pytest.mark.slow
 def test_a_leg_column_places_the_unloading_points_on_the_unloading_leg(tmp_path):
     """E from the unloading leg's slope (nu fixed), W and D from the loading leg's
     compaction: one hydrostatic test with unloading fixes the three."""

@@ -76,6 +76,7 @@ def test_a_force_controlled_tool_resumes_at_its_travel(tmp_path):
         assert mine == pytest.approx(theirs, rel=1e-12, abs=1e-14)
 
 
+@pytest.mark.slow
 def test_the_solver_may_change_on_resume(tmp_path):
     (whole, whole_curve), (resumed, resumed_curve) = stop_and_resume(
         tmp_path, "tine-2in-90deg", TINE, 2, resume_overrides=["solver.linear=lu"])

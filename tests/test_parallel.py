@@ -165,6 +165,7 @@ def test_two_ranks_resume_from_their_checkpoint(tmp_path):
         assert mine["draft_force_at"] == pytest.approx(theirs["draft_force_at"], rel=1e-6)
 
 
+@pytest.mark.slow
 def test_calibrate_shares_its_jacobian_over_two_ranks(tmp_path):
     """Each rank evaluates its share of the finite-difference trials and all gather them:
     the same fit as one process, to the last digit; rank 0 alone writes and prints."""

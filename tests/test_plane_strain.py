@@ -21,8 +21,9 @@ def pressures(out):
         return np.array([float(row["pressure"]) for row in csv.DictReader(f)])
 
 
-@pytest.mark.parametrize("extra", [(), ("analysis.large_deformation=true", "mesh.corner_size=0.05",
-                                        "loading.magnitude=0.02", "loading.steps=4")],
+@pytest.mark.parametrize("extra", [pytest.param((), marks=pytest.mark.slow),
+                                   ("analysis.large_deformation=true", "mesh.corner_size=0.05",
+                                    "loading.magnitude=0.02", "loading.steps=4")],
                          ids=["small strain", "large deformation"])
 def test_the_plane_mesh_solves_the_slab_s_problem(solve, extra):
     """Every step's footing pressure and Newton count equal the slab's (to round-off): the

@@ -253,6 +253,7 @@ def test_appendix_c_paths_of_the_modified_cap_run(tmp_path, path, settings):
     assert (tmp_path / "path.png").exists()
 
 
+@pytest.mark.slow
 def test_paths_driven_together_give_each_path_alone():
     """drive_all steps the points of several paths in one vectorised update; each point
     keeps its own Newton iteration and step cuts, so each path's rows are those of its

@@ -25,7 +25,7 @@ def test_the_tetrahedral_block_collapses_at_the_mohr_coulomb_stress(solve):
     assert summary["collapse_stress"] == pytest.approx(unconfined_strength(500.0, 30.0), rel=1e-6)
 
 
-@pytest.mark.parametrize("nu", [0.3, 0.49])
+@pytest.mark.parametrize("nu", [0.3, pytest.param(0.49, marks=pytest.mark.slow)])
 def test_mean_dilatation_triangles_reach_prandtl_and_plain_ones_lock(solve, nu):
     """VII.4: tri6-bbar (P2/P0) on the 2D footing mesh (edge cells 0.02 ft) within 0.2% of
     (2 + pi) c at any Poisson's ratio; plain tri6 must meet the isochoric flow at every point

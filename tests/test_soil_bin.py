@@ -50,6 +50,7 @@ def test_gap_opens_behind_the_pushed_tool_and_draft_is_the_supports_reaction():
     assert -reaction == pytest.approx(last.force, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_bonded_tool_is_stiffer_than_the_interface():
     _, with_interface = solve()
     _, bonded = solve("tool.bonded=true")

@@ -259,6 +259,7 @@ def _processes_writing(folder):
     return found
 
 
+@pytest.mark.slow
 def test_study_runs_resumes_after_a_kill_and_writes_its_table(tmp_path):
     path = study_file(tmp_path, COLUMN + FIGURES)
     out = tmp_path / "out"
