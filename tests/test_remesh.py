@@ -153,3 +153,19 @@ def test_a_run_stopped_after_a_remesh_resumes_on_the_new_mesh(tmp_path):
 def test_remeshing_a_scene_it_cannot_is_refused_on_reading(overrides, words):
     with pytest.raises(InputError, match=words):
         load_scene(SCENES / "strip-footing-penetration.toml", overrides)
+
+
+def test_a_remesh_that_fails_ends_the_run_with_its_steps_on_disk(tmp_path, monkeypatch):
+    """gmsh failing on the deformed soil: status failed, the message says where, every
+    converged step and the last good mesh's checkpoint stay."""
+    from soilbin.remesh import remesher
+
+    def failing(*args, **kwargs):
+        raise RuntimeError("gmsh cannot mesh the deformed soil (a test's failure)")
+    monkeypatch.setattr(remesher, "mesh_outline", failing)
+    summary = run_scene(load_scene(SCENES / "strip-footing-penetration.toml", FOOTING), tmp_path)
+    assert summary["status"] == "failed" and summary["n_steps"] == 3
+    assert "remeshing after step 3 failed: gmsh cannot mesh" in summary["message"]
+    assert len(curve(tmp_path)) == 3
+    assert (tmp_path / "checkpoint" / "state.npz").exists()
+    assert not (tmp_path / "remeshes.csv").exists()
