@@ -28,19 +28,19 @@ from matplotlib.colors import LogNorm
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
-from study_tables import arguments, finished, run_study
+from study_tables import arguments, at, finished, run_study
 
 SIZE = "mesh.edge_size"
 FRACTIONS = (0.0175, 0.05, 0.125, 0.25, 0.5)   # settlement / B; 0.035 in: the small-strain plateau
 
 
-def at(rows, settlement):
-    """The pressure at this settlement (a step ends there), or None if not reached (the
-    settlement read off the transferred displacement drifts by about 1e-8 in a remesh)."""
-    settlements = [r["displacement"] for r in rows]
-    if settlements[-1] < settlement * (1.0 - 1e-5):
-        return None
-    return float(np.interp(settlement, settlements, [r["pressure"] for r in rows]))
+#: How far short of a settlement the curve may stop and still be read there: the settlement
+#: read off the transferred displacement drifts by about 1e-8 in a remesh.
+SLACK = 1e-5
+
+
+def pressure_at(rows, settlement):
+    return at(rows, "pressure", settlement, SLACK)
 
 
 def remeshes(folder):
@@ -54,7 +54,7 @@ def remeshes(folder):
 def tables(results, out, width, c):
     results = sorted(results, key=lambda r: -r[0].values[SIZE])
     finest = results[-1][2]
-    reference = {f: at(finest, f * width) for f in FRACTIONS}
+    reference = {f: pressure_at(finest, f * width) for f in FRACTIONS}
     heads = " | ".join(f"d/B = {f:g}: q [psi], q/c, vs finest" for f in FRACTIONS)
     pressure = [f"| edge size [in] | cells at the start | {heads} |",
                 "| --- | --- |" + " --- |" * len(FRACTIONS)]
@@ -66,7 +66,7 @@ def tables(results, out, width, c):
         size = case.values[SIZE]
         cells = []
         for f in FRACTIONS:
-            q = at(rows, f * width)
+            q = pressure_at(rows, f * width)
             vs = ("finest" if rows is finest else "–" if q is None or reference[f] is None
                   else f"{100 * (q / reference[f] - 1):+.1f}%")
             cells.append("–" if q is None else f"{q:.2f}, {q / c:.3f}, {vs}")

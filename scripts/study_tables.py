@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from doc_tables import FIGURES, ROOT, add_page_argument
 
 SOILBIN = Path(sys.executable).with_name("soilbin")
@@ -55,3 +57,12 @@ def finished(study, folder):
         with open(run / "curve.csv") as f:
             rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
         yield case, summary, rows
+
+
+def at(rows, column, displacement, slack=1e-9):
+    """A curve.csv column at this displacement (a step ends there), or None if the curve
+    stops more than ``slack`` of it short."""
+    reached = [r["displacement"] for r in rows]
+    if not reached or reached[-1] < displacement * (1.0 - slack):
+        return None
+    return float(np.interp(displacement, reached, [r[column] for r in rows]))

@@ -12,25 +12,16 @@ into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
 import shutil
 
-import numpy as np
 from scipy.optimize import brentq
 
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
-from study_tables import arguments, finished, run_study
+from study_tables import arguments, at, finished, run_study
 
 STUDIES = ("tine-mesh", "tine-cad-mesh")
 TRAVELS = (0.1, 0.5)
 SIZE, GROWTH = "mesh.element_size", "mesh.growth"
-
-
-def at(rows, column, travel):
-    """A curve.csv column at this travel (a step ends there), or None if not reached."""
-    travels = [r["displacement"] for r in rows]
-    if not travels or travels[-1] < travel * (1.0 - 1e-9):
-        return None
-    return float(np.interp(travel, travels, [r[column] for r in rows]))
 
 
 def shown(value, form=".4g"):

@@ -34,39 +34,41 @@ class MeshQuality:
         nodes = mesh.geometry.dofmap.array.reshape(-1, mesh.geometry.dofmap.offsets[1])
         corners = dim + 1 if self._simplex else 2 ** dim
         self._corners = nodes[:owned, :corners]   # vertices first, in the reference order
-        self._moved = None
-        self._orientation = np.sign(np.linalg.det(self._jacobian()))
+        self._orientation = np.sign(np.linalg.det(self._jacobian(self._coordinates())))
 
-    def _coordinates(self):
+    def _coordinates(self, moved=None):
+        """(n, corners, dim) the owned cells' corners, ``moved`` (n_nodes, dim) further."""
         dim = self.mesh.topology.dim
         x = self.mesh.geometry.x[self._corners][:, :, :dim]
-        return x if self._moved is None else x + self._moved[self._corners]
+        return x if moved is None else x + moved[self._corners]
 
-    def _jacobian(self):
+    def _jacobian(self, x):
         """(n, dim, dim) derivative of the cell's map: a simplex's, or the (bi/tri)linear
         map's at the centre (the mean of the edges along each reference axis)."""
-        x, dim = self._coordinates(), self.mesh.topology.dim
+        dim = self.mesh.topology.dim
         if self._simplex:
             return np.stack([x[:, v] - x[:, 0] for v in range(1, dim + 1)], axis=-1)
         low = [[v for v in range(2 ** dim) if not v >> axis & 1] for axis in range(dim)]
         return np.stack([np.mean([x[:, v | 1 << axis] - x[:, v] for v in low[axis]], axis=0)
                          for axis in range(dim)], axis=-1)
 
-    def cells(self):
-        """(n,) the least scaled Jacobian over each owned cell's corners."""
-        return (self._simplex_corners() if self._simplex else self._brick_corners()) \
+    def cells(self, moved=None):
+        """(n,) the least scaled Jacobian over each owned cell's corners, with the nodes
+        ``moved`` (n_nodes, dim) further if given."""
+        x = self._coordinates(moved)
+        return (self._simplex_corners(x) if self._simplex else self._brick_corners(x)) \
             * self._orientation
 
-    def _simplex_corners(self):
-        x, dim = self._coordinates(), self.mesh.topology.dim
+    def _simplex_corners(self, x):
+        dim = self.mesh.topology.dim
         longest = np.zeros(len(x))
         for v in range(dim + 1):
             lengths = [np.linalg.norm(x[:, w] - x[:, v], axis=-1) for w in range(dim + 1) if w != v]
             longest = np.maximum(longest, np.prod(lengths, axis=0))
-        return np.linalg.det(self._jacobian()) / longest / REGULAR_SIMPLEX[dim]
+        return np.linalg.det(self._jacobian(x)) / longest / REGULAR_SIMPLEX[dim]
 
-    def _brick_corners(self):
-        x, dim = self._coordinates(), self.mesh.topology.dim
+    def _brick_corners(self, x):
+        dim = self.mesh.topology.dim
         least = np.full(len(x), np.inf)
         for v in range(2 ** dim):
             # the edges from corner v along each reference axis, pointing the axis's way
@@ -79,9 +81,5 @@ class MeshQuality:
     def minimum(self, moved=None):
         """The least cell quality of the whole mesh, or of the mesh with its nodes ``moved``
         (n_nodes, dim) further; collective."""
-        self._moved = moved
-        try:
-            local = self.cells().min(initial=np.inf)
-        finally:
-            self._moved = None
+        local = self.cells(moved).min(initial=np.inf)
         return float(self.mesh.comm.allreduce(local, op=MPI.MIN))

@@ -31,7 +31,7 @@ from ..problem.loads import start_mean_pressure
 from ..solver.quadrature import quadrature_space
 from .mesher import Sizes, mesh_outline
 from .outline import OutlineError, gather_outline, initial_sizes
-from .transfer import QUADRILATERAL_TRIANGLES, OldCells
+from .transfer import OldCells, cell_triangles
 
 #: gmsh's input rounded to this fraction of the mesh's extent: the mesh a remesh makes must
 #: not depend on round-off (partitioned runs sum their forces in another order, and gmsh's
@@ -236,7 +236,7 @@ def _size_field(corners, sizes, simplices, outline):
     np.add.at(count, inverse, 1.0)
     at_node = total / count
     at_corner = at_node[inverse].reshape(corners.shape[:2])
-    split = [(0, 1, 2)] if simplices else QUADRILATERAL_TRIANGLES
+    split = cell_triangles(simplices)
     triangles = np.concatenate([corners[:, list(t)] for t in split])
     values = np.concatenate([at_corner[:, list(t)] for t in split])
     _, vertex = cKDTree(nodes).query(outline.vertices)   # the outline's vertices are old nodes

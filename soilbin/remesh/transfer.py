@@ -24,12 +24,17 @@ from mpi4py import MPI
 QUADRILATERAL_TRIANGLES = ((0, 1, 3), (0, 3, 2))
 
 
+def cell_triangles(simplex):
+    """The corners of a cell's triangles: the triangle itself, or a quadrilateral's two."""
+    return ((0, 1, 2),) if simplex else QUADRILATERAL_TRIANGLES
+
+
 class OldCells:
     """The old mesh on rank 0 alone, cut into triangles, to find points in: ``corners``
     (n, k, 2), the old cells' corners in the DOLFINx order, in the input cell order."""
 
     def __init__(self, corners, simplex):
-        split = [(0, 1, 2)] if simplex else QUADRILATERAL_TRIANGLES
+        split = cell_triangles(simplex)
         self._pieces = len(split)
         flat = corners.reshape(-1, 2)
         self._nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
