@@ -120,9 +120,11 @@ and ``yield_state``: 0 elastic, 1 failure surface, 2 apex or corner of
 failure surface and cut-off, 3 cut-off, 4 cap, 5 corner of cap and failure
 surface (codes of :mod:`.base`).
 """
-import abc
 import dataclasses
 import enum
+import functools
+import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -131,8 +133,15 @@ from ..tensors import IDENTITY
 from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
 from .cone import tension_cutoff_param
 from .elastic import IsotropicElasticity
-from .invariant_return import (YIELD_TOL, Response, Surface, Trial, check_converged, invariants,
-                               scalar_root, smooth_return)
+from .invariant_return import (FALLBACK, N_ROW, S_N, S_TR, X_ROW, YIELD_TOL, bracketed_root,
+                               bulk_compliance, bulk_pressure, bulk_strain, check_converged,
+                               finish, invariants, local_settings, point_invariants, scratch,
+                               smooth_return, solved_ratio, strain_row, trial_split)
+from .jit import kernel
+from .yield_surfaces import (CAP_A, CAP_B, CAP_BETA, CAP_C, CAP_D, CAP_R, CAP_SLOTS,
+                             CAP_SURFACE, CAP_W, DF_LO, ETA_D, EXPONENTIAL, F_MIN, G_, J_LO, K_,
+                             L_MIN, LOG_SHIFT, P_LO, SURFACE, VOLUMETRIC, X_MIN, cap_compaction,
+                             cap_failure, smooth_surface)
 
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
@@ -151,10 +160,299 @@ class CapHardening(enum.Enum):
     CAP_COMPACTION = "cap_compaction"
 
 
+# --- the return map of one point (module doc, *Regions*), compiled ------------------------
+
+@kernel
+def failure_split(prm, p, F, dF, p_n, de_v, J_tr):
+    """g(p) = E(p; p_n) - de_v - 3 eta_d F' (J_tr - F) / G with (F, F') at I1 = 3p:
+    the volumetric strain left by a return onto the failure surface at p along
+    its potential, dgamma = (J_tr - F) / G (module doc); g = 0 at the return."""
+    return bulk_strain(prm, p, p_n) - de_v - 3.0 * prm[ETA_D] * dF * (J_tr - F) / prm[G_]
+
+
+@kernel
+def failure_slope(prm, p, J_tr, F, dF, d2F):
+    """dg/dp of :func:`failure_split`: 1/K(p) + 9 eta_d (F'^2 - F'' (J_tr - F)) / G,
+    at least 1/K(p) where J_tr >= F (F'' <= 0)."""
+    return bulk_compliance(prm, p) + 9.0 * prm[ETA_D] * (dF**2 - d2F * (J_tr - F)) / prm[G_]
+
+
+@kernel
+def failure_sensitivities(prm, p, J_tr, F, dF, d2F):
+    """(p_e, p_J, J_e, J_J) of the failure return at p (implicit-function theorem
+    on g(p) = 0, J = F(3p)): p_e = 1/g', p_J = 3 eta_d F' / (G g'), J_e = 3 F' p_e,
+    J_J = 3 F' p_J; G p_J != J_e (unsymmetric tangent) unless eta_d = 1."""
+    dg = failure_slope(prm, p, J_tr, F, dF, d2F)
+    p_e, p_J = 1.0 / dg, 3.0 * prm[ETA_D] * dF / (prm[G_] * dg)
+    return p_e, p_J, 3.0 * dF * p_e, 3.0 * dF * p_J
+
+
+@kernel
+def failure_equation(p, args):
+    """(g, g') of the return onto the failure surface at p (:func:`failure_split`)."""
+    prm, p_n, de_v, J_tr = args
+    F, dF, d2F = cap_failure(prm, 3.0 * p)
+    return failure_split(prm, p, F, dF, p_n, de_v, J_tr), failure_slope(prm, p, J_tr, F, dF, d2F)
+
+
+failure_root = bracketed_root(failure_equation)
+
+
+@kernel
+def position_equation(k, args):
+    """X(k) - X and its slope: the cap's end X(k) = k + R F(k) is increasing."""
+    prm, X = args
+    F, dF, _ = cap_failure(prm, k)
+    return k + prm[CAP_R] * F - X, 1.0 + prm[CAP_R] * dF
+
+
+position_root = bracketed_root(position_equation)
+
+
+@kernel
+def kappa_of(prm, X):
+    """The hardening parameter kappa with X(kappa) = X: the cap centre is
+    L = max(kappa, L_min) (Sandler & Rubin 1979). X(k) >= k above L_min (F >= 0) and
+    X(k) <= k + R F(L_min) below it. Returns (kappa, converged)."""
+    if X >= prm[X_MIN]:
+        lo, hi = prm[L_MIN], X
+    else:
+        lo, hi = X - prm[CAP_R] * prm[F_MIN], prm[L_MIN]
+    return position_root((prm, X), lo, hi, math.nan)
+
+
+@kernel
+def kappa_at(prm, H):
+    """kappa whose compaction W (1 - exp(-D X(kappa))) is H < W (B.11), the cap's
+    end X not below L_min (there the cap is the point L_min)."""
+    return kappa_of(prm, max(-math.log1p(-H / prm[CAP_W]) / prm[CAP_D], prm[L_MIN]))
+
+
+@kernel
+def corner_equation(L, args):
+    """(g, g') of the corner's volumetric split g(L) = E(L/3; p_n) - de_v + H(L) - H_n."""
+    prm, p_n, de_v, H_n = args
+    H, dH = cap_compaction(prm, L)
+    return (bulk_strain(prm, L / 3.0, p_n) - de_v + H - H_n,
+            bulk_compliance(prm, L / 3.0) / 3.0 + dH)
+
+
+corner_root = bracketed_root(corner_equation)
+
+
+@kernel
+def corner_return(prm, p_n, de_v, kappa_n):
+    """The stress at the corner (L, F(L)) of a retreating cap: the plastic strain
+    is that of the failure surface (compaction H(L) - H(kappa_n) <= 0) plus
+    deviatoric flow on the cap (its normal at the corner), so the volumetric split
+
+        g(L) = E(L/3; p_n) - de_v + H(L) - H(kappa_n) = 0
+
+    is a monotone scalar equation on [L_min, kappa_n] (g(kappa_n) > 0 here): a
+    bracketed root, and dp/de_v = 1 / (3 g'(L)) > 0. Where g(L_min) >= 0 the
+    corner stays at L_min (p, J fixed; the apex if F(L_min) = 0) and kappa
+    follows the compaction below L_min. Returns (kappa, p, J, (p_e, p_J, J_e, J_J), code,
+    converged)."""
+    L_min = prm[L_MIN]
+    args = (prm, p_n, de_v, cap_compaction(prm, kappa_n)[0])
+    g_min = corner_equation(L_min, args)[0]
+    at_min = g_min >= 0.0      # always where kappa_n < L_min (I1_tr <= L_n here)
+    if at_min:   # the compaction left at L_min: H(kappa) = H(L_min) - g(L_min)
+        kappa, converged = kappa_at(prm, cap_compaction(prm, L_min)[0] - g_min)
+    else:
+        kappa, converged = corner_root(args, L_min, kappa_n, math.nan)
+    L = max(kappa, L_min)
+    F, dF, _ = cap_failure(prm, L)
+    L_e = 0.0 if at_min else 1.0 / corner_equation(L, args)[1]
+    code = APEX if at_min and F <= 0.0 else CAP_CORNER
+    return kappa, L / 3.0, max(F, 0.0), (L_e / 3.0, 0.0, dF * L_e, 0.0), code, converged
+
+
+@kernel
+def warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L, x):
+    """x = (p, J, dgamma, kappa): the cap return's start from a ``guess`` state on a free cap: its
+    stress and cap centre, and the multiplier that best splits this step's strain along
+    the flow direction there, dgamma = (c f_p + s f_J) / (f_p^2 + f_J^2),
+    c = de_v - E(p; p_n), s = (J_tr - J) / G."""
+    p, J = point_invariants(guess_stress)
+    f_p, f_J = smooth_surface(prm, p, J, guess_L, 0.0)[1:3]
+    c = de_v - bulk_strain(prm, p, p_n)
+    shear = (J_tr - J) / prm[G_]
+    x[0], x[1], x[2], x[3] = p, J, max((c * f_p + shear * f_J) / (f_p**2 + f_J**2), 0.0), guess_L
+
+
+@kernel
+def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settings,
+              sigma, C, ws):
+    """The return map of one point (module doc, *Regions*): writes sigma and C; returns
+    (L, X, plastic compaction, equivalent plastic strain increment, yield_state,
+    converged). ``last`` is the yield_state of the last iterate (ELASTIC if none), whose
+    cap state ``guess_stress``, ``guess_L`` may start the cap's Newton."""
+    R, L_min = prm[CAP_R], prm[L_MIN]
+    p_n, de_v, J_tr = trial_split(prm, deps, stress_n, ws[S_N], ws[S_TR], ws[N_ROW])
+    p_tr = bulk_pressure(prm, p_n, de_v)
+    p_lo, J_lo, dF_lo = prm[P_LO], prm[J_LO], prm[DF_LO]
+    F_L, dF_L, _ = cap_failure(prm, L_n)
+    # kappa = L but where the cap has retreated past L_min (module doc).
+    kappa_n, height, converged = L_n, F_L, True
+    if X_n < L_n + R * F_L:       # X_n < X(L_n)
+        kappa_n, converged = kappa_of(prm, X_n)
+        height = (X_n - L_n) / R   # of the cap at L: (X - L) / R
+    scale = 3.0 * abs(p_tr) + J_tr + abs(X_n) + prm[CAP_C]
+    tol = YIELD_TOL * scale
+
+    f_fail = J_tr - cap_failure(prm, 3.0 * p_tr)[0]
+    cap_side = 3.0 * p_tr > L_n
+    cap = cap_side and math.hypot((3.0 * p_tr - L_n) / R, J_tr) - height > tol
+    low = not cap_side and (f_fail > tol or p_lo - p_tr > tol)
+    # Wedges of the fixed corners: the failure return's volumetric split g(p)
+    # (failure_split) >= 0 at p_lo, <= 0 at L/3 puts the trial in the normal cone
+    # of the corner, spanned by the return directions of its surfaces.
+    corner = low and J_tr >= J_lo and failure_split(prm, p_lo, J_lo, dF_lo, p_n, de_v, J_tr) >= 0.0
+    cut = low and not corner and J_tr < J_lo and p_tr < p_lo
+    cap_corner = (low and not corner and not cut
+                  and failure_split(prm, L_n / 3.0, F_L, dF_L, p_n, de_v, J_tr) <= 0.0)
+    fail = low and not corner and not cut and not cap_corner
+    volumetric = prm[VOLUMETRIC] == 1.0
+
+    # The elastic response, overwritten by the return mode.
+    p, J, code, kappa = p_tr, J_tr, ELASTIC, kappa_n
+    sens = (1.0 / bulk_compliance(prm, p_tr), 0.0, 0.0, 1.0)
+    ratio = 1.0
+    if corner or (cap_corner and not volumetric):
+        # The fixed vertices: the failure surface's lowest point (apex, or its corner with
+        # the cut-off), the corner (L, F(L)) of a cap that never retreats. A vertex's own
+        # tangent has no bulk stiffness (every trial in its normal cone returns to it). At
+        # the foot of a short stretch of failure surface between the two vertices (a point
+        # near the surface of a soil without strength at zero stress, where L is small) a
+        # point under those tangents goes from one vertex to the other in every Newton
+        # iterate, past the solution on the stretch between them, and the load step
+        # stalls. A point that was at the other vertex at the last iterate therefore gets
+        # the tangent of that stretch, the failure return's at the vertex.
+        p = p_lo if corner else L_n / 3.0
+        F, dF, d2F = cap_failure(prm, 3.0 * p)
+        sens = (0.0, 0.0, 0.0, 0.0)
+        if (corner and last == CAP_CORNER) or (cap_corner and last == APEX):
+            sens = failure_sensitivities(prm, p, J_tr, F, dF, d2F)
+        J, code = max(F, 0.0), APEX if corner else CAP_CORNER
+    elif cut:
+        p, sens, code = p_lo, (0.0, 0.0, 0.0, 1.0), CUTOFF
+    elif fail:
+        # Onto the failure surface (perfectly plastic) along its potential:
+        # dgamma = (J_tr - J)/G, J = F(3p) and the volumetric split leave g(p) = 0.
+        p, ok = failure_root((prm, p_n, de_v, J_tr), p_lo, L_n / 3.0, math.nan)
+        converged = converged and ok
+        F, dF, d2F = cap_failure(prm, 3.0 * p)
+        J, sens, code = F, failure_sensitivities(prm, p, J_tr, F, dF, d2F), FAILURE
+    elif cap:
+        # Onto the hardening cap (smooth_return with h = kappa, the cap centre
+        # L = max(kappa, L_min)), from the trial state or, where the last iterate was on
+        # a free cap, from it.
+        lp = (p_n, de_v, J_tr, kappa_n, scale, 0.0, cap_compaction(prm, kappa_n)[0],
+              strain_row(prm, p_tr, scale))
+        x, cold = ws[X_ROW, :4], ws[FALLBACK, :4]
+        cold[0], cold[1], cold[2], cold[3] = p_tr, J_tr, 0.0, kappa_n
+        if last == CAP and guess_L > L_min:
+            warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L, x)
+        else:
+            x[:] = cold
+        p, J, _, kappa, sens, ok = smooth_return(prm, lp, settings, ws)
+        converged = converged and ok
+        code = CAP
+    if volumetric and (corner or cut or fail or cap_corner):
+        # The cap follows the plastic volumetric strain back (B.11); where its centre
+        # L = max(kappa, L_min) would pass the stress (I1 > L), and beyond the failure
+        # surface's normal at the corner, the stress is the corner.
+        behind = cap_corner
+        if not cap_corner:
+            compaction = de_v - bulk_strain(prm, p, p_n)
+            kappa, ok = kappa_at(prm, cap_compaction(prm, kappa_n)[0] + compaction)
+            converged = converged and ok
+            behind = 3.0 * p > max(kappa, L_min)
+        if behind:
+            kappa, p, J, sens, code, ok = corner_return(prm, p_n, de_v, kappa_n)
+            converged = converged and ok
+    if code != ELASTIC:
+        ratio = solved_ratio(J, J_tr, sens[3])
+    compaction, eq = finish(prm, p, ratio, sens, code != ELASTIC, ws[S_TR], ws[N_ROW], p_n,
+                            de_v, J_tr, sigma, C)
+    if kappa == kappa_n:
+        return L_n, X_n, compaction, eq, code, converged
+    return (max(kappa, L_min), kappa + R * cap_failure(prm, kappa)[0], compaction, eq, code,
+            converged)
+
+
+@kernel
+def cap_update(prm, deps, stress, L_n, X_n, last, guess_stress, guess_L, settings,
+               sigma, C, L, X, compaction, eq, code):
+    """:func:`cap_point` at every point; returns the number of points whose local solve
+    did not converge."""
+    ws = scratch()
+    failed = 0
+    for i in range(deps.shape[0]):
+        L[i], X[i], compaction[i], eq[i], code[i], ok = cap_point(
+            prm, deps[i], stress[i], L_n[i], X_n[i], last[i], guess_stress[i], guess_L[i],
+            settings, sigma[i], C[i], ws)
+        failed += 0 if ok else 1
+    return failed
+
+
+@kernel
+def through_equation(L, args):
+    """F(L)^2 - ((I1 - L)/R)^2 - J^2 and its slope."""
+    prm, I1, J = args
+    F, dF, _ = cap_failure(prm, L)
+    R = prm[CAP_R]
+    return F**2 - ((I1 - L) / R) ** 2 - J**2, 2.0 * F * dF + 2.0 * (I1 - L) / R**2
+
+
+through_root = bracketed_root(through_equation)
+
+
+@kernel
+def cap_through(prm, I1, J, L, height):
+    """The initial cap centres: where the stress (I1, J) lies beyond the cap of centre L
+    and height (X0 - L)/R, the cap through it, F(L)^2 = ((I1 - L)/R)^2 + J^2 on [L, I1]
+    (increasing in L); I1 itself where the stress is beyond failure. L in place."""
+    R = prm[CAP_R]
+    for i in range(I1.shape[0]):
+        if I1[i] > L[i] and ((I1[i] - L[i]) / R) ** 2 + J[i] ** 2 > height[i] ** 2:
+            if cap_failure(prm, I1[i])[0] >= J[i]:
+                L[i] = through_root((prm, I1[i], J[i]), L[i], I1[i],
+                                   math.nan)[0]
+            else:
+                L[i] = I1[i]
+
+
+
+
+@kernel
+def kappa_array(prm, X, kappa):
+    """:func:`kappa_of` at every X, into kappa; returns the number not converged."""
+    failed = 0
+    for i in range(X.shape[0]):
+        kappa[i], ok = kappa_of(prm, X[i])
+        failed += 0 if ok else 1
+    return failed
+
+
+@kernel
+def apex_of(prm):
+    """I1 where F = 0 (F is increasing and concave: Newton from 0 converges monotonically)."""
+    x = 0.0
+    for _ in range(200):
+        F, dF, _ = cap_failure(prm, x)
+        step = F / dF
+        x -= step
+        if abs(step) <= 1e-15 * (1.0 + abs(x)):
+            break
+    return x
+
+
 @dataclasses.dataclass(frozen=True, kw_only=True)
 class CapModel(IsotropicElasticity):
-    """Base of the cap models (module doc); a subclass gives the failure function and
-    its parameters (A, and B for the modified cap)."""
+    """Base of the cap models (module doc); a subclass gives the failure function's
+    parameters A and B (B = 0: DiMaggio–Sandler)."""
 
     C: float = magnitude_param(doc="failure surface: C of -C exp(-beta I1), stress units")
     beta: float = magnitude_param(doc="failure surface: beta of exp(-beta I1), 1 / stress units")
@@ -182,70 +480,79 @@ class CapModel(IsotropicElasticity):
     history = {"stress": (6,), "cap_L": (), "cap_X": (), "eps_p_vol": (), "eps_p_eq": (),
                "yield_state": ()}
 
-    @abc.abstractmethod
+    # --- the parameter vector of the compiled return ------------------------------------
+
+    @functools.cached_property
+    def prm(self):
+        """The parameters as the compiled return reads them (:mod:`.yield_surfaces`)."""
+        prm = np.zeros(CAP_SLOTS)
+        prm[[G_, K_, EXPONENTIAL, LOG_SHIFT, SURFACE]] = self.G, self.K, 0.0, math.nan, CAP_SURFACE
+        prm[[CAP_A, CAP_B, CAP_C, CAP_BETA, CAP_R, CAP_W, CAP_D, ETA_D, VOLUMETRIC]] = (
+            self.A, self.B, self.C, self.beta, self.R, self.W, self.D, self.dilatancy,
+            float(self.hardening is CapHardening.VOLUMETRIC))
+        # The failure surface's lowest point, from F alone (the slots above).
+        p_lo, J_lo, dF_lo = self._lowest(prm)
+        L_min = 3.0 * p_lo
+        if self.hardening is CapHardening.VOLUMETRIC:
+            L_min = max(L_min, 0.0)
+        F_min = float(cap_failure(prm, L_min)[0])
+        prm[[P_LO, J_LO, DF_LO, L_MIN, X_MIN, F_MIN]] = (p_lo, J_lo, dF_lo, L_min,
+                                                         L_min + self.R * F_min, max(F_min, 0.0))
+        return prm
+
+    def _lowest(self, prm):
+        """(p_lo, J_lo, F'(3 p_lo)): the mean stress where the elastic domain ends in
+        tension (the apex, or the cut-off if that comes first) and sqrt(J2) there. The
+        apex is where F = 0 (:func:`apex_of`)."""
+        p_apex = apex_of(prm) / 3.0
+        if -self.tension_cutoff > p_apex:
+            p = -self.tension_cutoff
+            F, dF, _ = cap_failure(prm, 3.0 * p)
+            return p, F, dF
+        return p_apex, 0.0, cap_failure(prm, 3.0 * p_apex)[1]
+
+    # --- geometry ------------------------------------------------------------------------
+
     def failure(self, I1):
         """(F, F', F'') of the failure surface sqrt(J2) = F(I1), I1 compression positive."""
-
-    # --- geometry --------------------------------------------------------------------
+        I1 = np.asarray(I1, dtype=float)
+        if I1.ndim == 0:
+            return tuple(np.float64(v) for v in cap_failure(self.prm, float(I1)))
+        return cap_failure(self.prm, np.ascontiguousarray(I1))
 
     @property
     def apex(self):
-        """I1 where F = 0 (F is increasing and concave: Newton from 0 converges monotonically)."""
-        x = 0.0
-        for _ in range(200):
-            F, dF, _ = (float(v) for v in self.failure(np.array(x)))
-            step = F / dF
-            x -= step
-            if abs(step) <= 1e-15 * (1.0 + abs(x)):
-                break
-        return x
+        """I1 where F = 0."""
+        return apex_of(self.prm)
 
     @property
     def lowest(self):
-        """(p_lo, J_lo, F'(3 p_lo)): the mean stress where the elastic domain ends in
-        tension (the apex, or the cut-off if that comes first) and sqrt(J2) there."""
-        p_apex = self.apex / 3.0
-        if -self.tension_cutoff > p_apex:
-            p = -self.tension_cutoff
-            F, dF, _ = (float(v) for v in self.failure(np.array(3.0 * p)))
-            return p, F, dF
-        return p_apex, 0.0, float(self.failure(np.array(3.0 * p_apex))[1])
+        """(p_lo, J_lo, F'(3 p_lo)) (see :meth:`_lowest`)."""
+        return tuple(float(v) for v in self.prm[[P_LO, J_LO, DF_LO]])
 
     @property
     def L_min(self):
         """The smallest cap centre L: the apex (or the cut-off), and with the
         volumetric hardening not on the tension side (Sandler & Rubin: L = max(kappa, 0))."""
-        L = 3.0 * self.lowest[0]
-        return max(L, 0.0) if self.hardening is CapHardening.VOLUMETRIC else L
+        return float(self.prm[L_MIN])
 
     def X(self, L):
         """Cap position X(L) = L + R F(L)."""
         return L + self.R * self.failure(L)[0]
 
     def kappa(self, X):
-        """The hardening parameter kappa with X(kappa) = X (X is increasing): the cap
-        centre is L = max(kappa, L_min) (Sandler & Rubin 1979)."""
-        X = np.asarray(X, dtype=float)
-        L_min = self.L_min
-        X_min = float(self.X(np.array(L_min)))
-        F_min = max(float(self.failure(np.array(L_min))[0]), 0.0)
-        # X(k) >= k above L_min (F >= 0) and X(k) <= k + R F(L_min) below it.
-        lo = np.where(X >= X_min, L_min, X - self.R * F_min)
-        hi = np.where(X >= X_min, X, L_min)
-
-        def position(k, idx):
-            F, dF, _ = self.failure(k)
-            return k + self.R * F - X[idx], 1.0 + self.R * dF
-
-        kappa, converged = scalar_root(position, lo, hi)
-        check_converged(self, converged, len(X))
+        """The hardening parameter kappa with X(kappa) = X (:func:`kappa_of`)."""
+        X = np.ascontiguousarray(X, dtype=float)
+        kappa = np.empty_like(X)
+        check_converged(self, kappa_array(self.prm, X, kappa), len(X))
         return kappa
 
     def compaction(self, L):
         """(H, dH/dL): the plastic compaction W (1 - exp(-D X(L))) of the cap at L (B.11)."""
-        F, dF, _ = self.failure(L)
-        e = np.exp(-self.D * (L + self.R * F))
-        return self.W * (1.0 - e), self.W * self.D * e * (1.0 + self.R * dF)
+        L = np.asarray(L, dtype=float)
+        if L.ndim == 0:
+            return tuple(np.float64(v) for v in cap_compaction(self.prm, float(L)))
+        return cap_compaction(self.prm, np.ascontiguousarray(L))
 
     # --- driver interface ----------------------------------------------------------------
 
@@ -253,26 +560,11 @@ class CapModel(IsotropicElasticity):
         state = super().initial_state(n, stress0)
         X0 = max(self.X0, self.L_min)
         if self.hardening is CapHardening.CAP_COMPACTION:
-            X0 = max(X0, float(self.X(np.array(self.L_min))))
+            X0 = max(X0, float(self.X(self.L_min)))
         kappa0 = float(self.kappa(np.array([X0]))[0])
         L = np.full(n, max(kappa0, self.L_min))
         p, J = invariants(state["stress"])
-        I1 = 3.0 * p
-        height = (X0 - L) / self.R     # F(L), or less where kappa < L_min
-        beyond = np.flatnonzero((I1 > L) & (((I1 - L) / self.R) ** 2 + J**2 > height**2))
-        if beyond.size:
-            # The cap through the initial stress: F(L)^2 = ((I1 - L)/R)^2 + J^2 on
-            # [L, I1] (increasing in L); I1 itself where the stress is beyond failure.
-            I1b, Jb = I1[beyond], J[beyond]
-
-            def through(Lb, k):
-                F, dF, _ = self.failure(Lb)
-                return (F**2 - ((I1b[k] - Lb) / self.R) ** 2 - Jb[k] ** 2,
-                        2.0 * F * dF + 2.0 * (I1b[k] - Lb) / self.R**2)
-
-            admissible = self.failure(I1b)[0] >= Jb
-            Lb, _ = scalar_root(through, L[beyond], I1b)
-            L[beyond] = np.where(admissible, Lb, I1b)
+        cap_through(self.prm, 3.0 * p, J, L, (X0 - L) / self.R)   # F(L), or less (kappa < L_min)
         state["cap_L"] = L
         # X(L), but X0 itself where the cap has retreated past L_min (kappa0 < L_min).
         state["cap_X"] = self.X(L)
@@ -281,249 +573,20 @@ class CapModel(IsotropicElasticity):
         return state
 
     def integrate(self, deps, state, guess=None):
-        G, R = self.G, self.R
-        bulk = self.bulk
-        trial = Trial.split(deps, state["stress"], G)
-        p_n, de_v, J_tr = trial.p_n, trial.de_v, trial.J_tr
-        L_n, X_n = state["cap_L"], state["cap_X"]
-        p_tr = bulk.pressure(p_n, de_v)
-        response = Response(trial, bulk, p_tr)
-        p_lo, J_lo, dF_lo = self.lowest
-        F_L, dF_L, _ = self.failure(L_n)
-        # kappa = L but where the cap has retreated past L_min (module doc).
-        kappa_n = L_n.copy()
-        shrunk = np.flatnonzero(X_n < L_n + R * F_L)       # X_n < X(L_n)
-        kappa_n[shrunk] = self.kappa(X_n[shrunk])
-        height = F_L.copy()        # of the cap at L: (X - L) / R
-        height[shrunk] = (X_n[shrunk] - L_n[shrunk]) / R
-        scale = 3.0 * np.abs(p_tr) + J_tr + np.abs(state["cap_X"]) + self.C
-        tol = YIELD_TOL * scale
-
-        with np.errstate(over="ignore", invalid="ignore"):
-            f_fail = J_tr - self.failure(3.0 * p_tr)[0]
-        cap_side = 3.0 * p_tr > L_n
-        f_cap = np.hypot((3.0 * p_tr - L_n) / R, J_tr) - height
-        cap = cap_side & (f_cap > tol)
-        low = ~cap_side & ((f_fail > tol) | (p_lo - p_tr > tol))
-        # Wedges of the fixed corners: the failure return's volumetric split g(p)
-        # (_failure_split) >= 0 at p_lo, <= 0 at L/3 puts the trial in the normal cone
-        # of the corner, spanned by the return directions of its surfaces.
-        g_lo = self._failure_split(bulk, p_lo, J_lo, dF_lo, p_n, de_v, J_tr)
-        corner = low & (J_tr >= J_lo) & (g_lo >= 0.0)
-        cut = low & ~corner & (J_tr < J_lo) & (p_tr < p_lo)
-        g_cap = self._failure_split(bulk, L_n / 3.0, F_L, dF_L, p_n, de_v, J_tr)
-        cap_corner = low & ~corner & ~cut & (g_cap <= 0.0)
-        fail = low & ~corner & ~cut & ~cap_corner
-
-        last = guess["yield_state"] if guess is not None else response.code
-        fixed_cap_corner = cap_corner & (self.hardening is CapHardening.CAP_COMPACTION)
-        self._fixed_vertices(trial, bulk, corner, fixed_cap_corner, L_n, last, response)
-        it = np.flatnonzero(cut)
-        zero = np.zeros(it.size)
-        response.solved(it, np.full(it.size, p_lo), J_tr[it], zero, zero, zero, zero + 1.0, CUTOFF)
-
-        ifail = np.flatnonzero(fail)
-        if ifail.size:
-            self._failure_return(trial, bulk, ifail, p_lo, L_n[ifail] / 3.0, response)
-
-        kappa = kappa_n.copy()
-        icap = np.flatnonzero(cap)
-        if icap.size:
-            kappa[icap] = self._cap_return(trial, bulk, icap, p_tr[icap], kappa_n[icap],
-                                           scale[icap], response, guess)
-        if self.hardening is CapHardening.VOLUMETRIC:
-            self._retreat(trial, bulk, np.flatnonzero(corner | cut | fail),
-                          np.flatnonzero(cap_corner), kappa_n, kappa, response)
-
-        sigma, tangent, compaction, eq = response.finish(bulk, G)
-        moved = np.flatnonzero(kappa != kappa_n)
-        L, X = L_n.copy(), X_n.copy()
-        L[moved] = np.maximum(kappa[moved], self.L_min)
-        X[moved] = self.X(kappa[moved])
+        m = len(deps)
+        guess = state if guess is None else guess
+        last = guess["yield_state"] if guess is not state else np.full(m, ELASTIC)
+        sigma, C = np.empty((m, 6)), np.empty((m, 6, 6))
+        L, X, compaction, eq, code = (np.empty(m) for _ in range(5))
+        failed = cap_update(self.prm, np.ascontiguousarray(deps), state["stress"],
+                            state["cap_L"], state["cap_X"], last, guess["stress"],
+                            guess["cap_L"], local_settings(), sigma, C, L, X, compaction, eq,
+                            code)
+        check_converged(self, failed, m)
         new_state = {"stress": sigma, "cap_L": L, "cap_X": X,
                      "eps_p_vol": state["eps_p_vol"] - compaction,
-                     "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": response.code}
-        return sigma, tangent, new_state
-
-    def _fixed_vertices(self, trial, bulk, apex, cap_corner, L_n, last, response):
-        """The stress at the fixed vertices: the failure surface's lowest point (apex, or
-        corner with the cut-off) at the points ``apex``, the corner (L, F(L)) with a cap
-        that never retreats at the points ``cap_corner``.
-
-        A vertex's own tangent has no bulk stiffness (every trial in its normal cone
-        returns to it). At the foot of a short stretch of failure surface between the two
-        vertices (a point near the surface of a soil without strength at zero stress,
-        where L is small) a point under those tangents goes from one vertex to the other
-        in every Newton iterate, past the solution on the stretch between them, and the
-        load step stalls. A point that was at the other vertex at the last iterate
-        (``last``: yield states) therefore gets the tangent of that stretch, the failure
-        surface's (:meth:`_failure_return`'s sensitivities at the vertex); a point that
-        stays at its vertex has the vertex's own."""
-        p = np.where(apex, self.lowest[0], L_n / 3.0)
-        F, dF, d2F = self.failure(3.0 * p)
-        crossed = (apex & (last == CAP_CORNER)) | (cap_corner & (last == APEX))
-        with np.errstate(all="ignore"):
-            sens = self._failure_sensitivities(bulk, p, trial.J_tr, F, dF, d2F)
-        sens = [np.where(crossed, s, 0.0) for s in sens]
-        for at, code in ((apex, APEX), (cap_corner, CAP_CORNER)):
-            k = np.flatnonzero(at)
-            response.solved(k, p[k], np.maximum(F[k], 0.0), *(s[k] for s in sens), code)
-
-    def _failure_split(self, bulk, p, F, dF, p_n, de_v, J_tr):
-        """g(p) = E(p; p_n) - de_v - 3 eta_d F' (J_tr - F) / G with (F, F') at I1 = 3p:
-        the volumetric strain left by a return onto the failure surface at p along
-        its potential, dgamma = (J_tr - F) / G (module doc); g = 0 at the return."""
-        return bulk.strain(p, p_n) - de_v - 3.0 * self.dilatancy * dF * (J_tr - F) / self.G
-
-    def _failure_slope(self, bulk, p, J_tr, F, dF, d2F):
-        """dg/dp of :meth:`_failure_split`: 1/K(p) + 9 eta_d (F'^2 - F'' (J_tr - F)) / G,
-        at least 1/K(p) where J_tr >= F (F'' <= 0)."""
-        return bulk.compliance(p) + 9.0 * self.dilatancy * (dF**2 - d2F * (J_tr - F)) / self.G
-
-    def _failure_sensitivities(self, bulk, p, J_tr, F, dF, d2F):
-        """(p_e, p_J, J_e, J_J) of the failure return at p (implicit-function theorem
-        on g(p) = 0, J = F(3p)): p_e = 1/g', p_J = 3 eta_d F' / (G g'), J_e = 3 F' p_e,
-        J_J = 3 F' p_J; G p_J != J_e (unsymmetric tangent) unless eta_d = 1."""
-        dg = self._failure_slope(bulk, p, J_tr, F, dF, d2F)
-        p_e, p_J = 1.0 / dg, 3.0 * self.dilatancy * dF / (self.G * dg)
-        return p_e, p_J, 3.0 * dF * p_e, 3.0 * dF * p_J
-
-    def _failure_return(self, trial, bulk, idx, p_lo, p_hi, response):
-        """Return onto the failure surface (perfectly plastic) along its potential:
-        dgamma = (J_tr - J)/G, J = F(3p) and the volumetric split leave g(p) = 0
-        (:meth:`_failure_split`) on [p_lo, p_hi]."""
-        p_n, de_v, J_tr = trial.p_n[idx], trial.de_v[idx], trial.J_tr[idx]
-
-        def g(p, k):
-            F, dF, d2F = self.failure(3.0 * p)
-            return (self._failure_split(bulk, p, F, dF, p_n[k], de_v[k], J_tr[k]),
-                    self._failure_slope(bulk, p, J_tr[k], F, dF, d2F))
-
-        p, converged = scalar_root(g, np.full(idx.size, p_lo), p_hi)
-        check_converged(self, converged, len(trial.p_n))
-        F, dF, d2F = self.failure(3.0 * p)
-        response.solved(idx, p, F, *self._failure_sensitivities(bulk, p, J_tr, F, dF, d2F),
-                        FAILURE)
-
-    def _retreat(self, trial, bulk, idx, ic, kappa_n, kappa, response):
-        """The cap of the points ``idx`` (apex, cut-off, failure surface: dilating)
-        follows their plastic volumetric strain back (B.11); where its centre
-        L = max(kappa, L_min) would pass the stress (I1 > L), and at the points
-        ``ic`` (beyond the failure surface's normal at the corner), the stress is the
-        corner (:meth:`_corner_return`). Sets ``kappa`` and ``response`` there."""
-        compaction = trial.de_v[idx] - bulk.strain(response.p[idx], trial.p_n[idx])
-        kappa[idx] = self._kappa_at(self.compaction(kappa_n[idx])[0] + compaction)
-        behind = 3.0 * response.p[idx] > np.maximum(kappa[idx], self.L_min)
-        corner = np.concatenate([ic, idx[behind]])
-        if corner.size:
-            kappa[corner] = self._corner_return(trial, bulk, corner, kappa_n[corner], response)
-
-    def _kappa_at(self, H):
-        """kappa whose compaction W (1 - exp(-D X(kappa))) is H < W (B.11), the cap's
-        end X not below L_min (there the cap is the point L_min)."""
-        return self.kappa(np.maximum(-np.log1p(-H / self.W) / self.D, self.L_min))
-
-    def _corner_return(self, trial, bulk, idx, kappa_n, response):
-        """The stress at the corner (L, F(L)) of a retreating cap: the plastic strain
-        is that of the failure surface (compaction H(L) - H(kappa_n) <= 0) plus
-        deviatoric flow on the cap (its normal at the corner), so the volumetric split
-
-            g(L) = E(L/3; p_n) - de_v + H(L) - H(kappa_n) = 0
-
-        is a monotone scalar equation on [L_min, kappa_n] (g(kappa_n) > 0 here): a
-        bracketed root, and dp/de_v = 1 / (3 g'(L)) > 0. Where g(L_min) >= 0 the
-        corner stays at L_min (p, J fixed; the apex if F(L_min) = 0) and kappa
-        follows the compaction below L_min. Returns kappa."""
-        p_n, de_v = trial.p_n[idx], trial.de_v[idx]
-        H_n = self.compaction(kappa_n)[0]
-        L_min = self.L_min
-        every = np.arange(idx.size)
-
-        def g(L, k):
-            H, dH = self.compaction(L)
-            return (bulk.strain(L / 3.0, p_n[k]) - de_v[k] + H - H_n[k],
-                    bulk.compliance(L / 3.0) / 3.0 + dH)
-
-        g_min = g(np.full(idx.size, L_min), every)[0]
-        at_min = g_min >= 0.0      # always where kappa_n < L_min (I1_tr <= L_n here)
-        kappa = np.full(idx.size, L_min)
-        moving = np.flatnonzero(~at_min)
-        if moving.size:
-            kappa[moving], converged = scalar_root(lambda L, k: g(L, moving[k]),
-                                                   np.full(moving.size, L_min),
-                                                   kappa_n[moving].copy())
-            check_converged(self, converged, len(trial.p_n))
-        fixed = np.flatnonzero(at_min)
-        if fixed.size:   # the compaction left at L_min: H(kappa) = H(L_min) - g(L_min)
-            kappa[fixed] = self._kappa_at(self.compaction(np.array(L_min))[0] - g_min[fixed])
-        L = np.maximum(kappa, L_min)
-        F, dF, _ = self.failure(L)
-        L_e = np.where(at_min, 0.0, 1.0 / g(L, every)[1])
-        zero = np.zeros(idx.size)
-        code = np.where(at_min & (F <= 0.0), APEX, CAP_CORNER)
-        for c in np.unique(code):
-            k = code == c
-            response.solved(idx[k], L[k] / 3.0, np.maximum(F[k], 0.0), L_e[k] / 3.0, zero[k],
-                            dF[k] * L_e[k], zero[k], c)
-        return kappa
-
-    def _warm_start(self, trial, bulk, idx, guess, surface, k):
-        """(p, J, dgamma, kappa) of the cap return from the ``guess`` state at the points
-        ``idx`` (``k``: their positions in the return): its stress and cap centre, and
-        the multiplier that best splits this step's strain along the flow direction there,
-        dgamma = (c f_p + s f_J) / (f_p^2 + f_J^2), c = de_v - E(p; p_n), s = (J_tr - J) / G."""
-        p, J = invariants(guess["stress"][idx])
-        kappa = guess["cap_L"][idx]
-        s = surface(p, J, kappa, k)
-        c = trial.de_v[idx] - bulk.strain(p, trial.p_n[idx])
-        shear = (trial.J_tr[idx] - J) / self.G
-        dgamma = np.maximum((c * s.f_p + shear * s.f_J) / (s.f_p**2 + s.f_J**2), 0.0)
-        return np.stack([p, J, dgamma, kappa], axis=1)
-
-    def _cap_return(self, trial, bulk, idx, p_tr, kappa_n, scale, response, guess=None):
-        """Return onto the hardening cap (smooth_return with h = kappa, the cap centre
-        L = max(kappa, L_min): below L_min only the cap's end X(kappa) moves, and its
-        height (X - L) / R falls short of F(L)), from the trial state or, where the
-        ``guess`` state is on a free cap, from it; returns kappa."""
-        R, L_min = self.R, self.L_min
-        volumetric = self.hardening is CapHardening.VOLUMETRIC
-
-        def surface(p, J, kappa, k):
-            F, dF, _ = self.failure(kappa)
-            free = kappa >= L_min
-            L = np.where(free, kappa, L_min)
-            a = (3.0 * p - L) / R
-            rho = np.hypot(a, J)
-            r3 = rho**3
-            height = np.where(free, F, (kappa - L_min) / R + F)
-            f_h = np.where(free, -a / (R * rho) - dF, -1.0 / R - dF)
-            return Surface(f=rho - height, f_p=3.0 * a / (R * rho), f_J=J / rho, f_h=f_h,
-                           f_pp=9.0 * J**2 / (R**2 * r3), f_pJ=-3.0 * a * J / (R * r3),
-                           f_JJ=a**2 / r3, f_ph=np.where(free, -3.0 * J**2 / (R**2 * r3), 0.0),
-                           f_Jh=np.where(free, a * J / (R * r3), 0.0), scale=scale[k])
-
-        def admissible(p, J, kappa, k):
-            # A cap of positive size; without the retreat kappa never goes below L_min.
-            return self.X(kappa) >= L_min if volumetric else kappa >= L_min
-
-        # Hardening (B.11): W (1 - exp(-D X(kappa))) - W (1 - exp(-D X(kappa_n))) = compaction.
-        H_n = self.compaction(kappa_n)[0]
-
-        def hardening(kappa, compaction, k):
-            H, dH = self.compaction(kappa)
-            return H - H_n[k] - compaction, dH, -np.ones_like(kappa)
-
-        cold = np.stack([p_tr, trial.J_tr[idx], np.zeros(idx.size), kappa_n], axis=1)
-        x0 = cold.copy()
-        if guess is not None:
-            k = np.flatnonzero((guess["yield_state"][idx] == CAP) & (guess["cap_L"][idx] > L_min))
-            x0[k] = self._warm_start(trial, bulk, idx[k], guess, surface, k)
-        p, J, _, kappa, sens, converged = smooth_return(
-            surface, hardening, bulk, self.G, trial, idx, p_tr, kappa_n, x0, scale,
-            admissible=admissible, fallback=cold)
-        check_converged(self, converged, len(trial.p_n))
-        response.solved(idx, p, J, *sens, CAP)
-        return kappa
+                     "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": code}
+        return sigma, C, new_state
 
 
 def cap_samples(table, cohesive):
@@ -592,10 +655,8 @@ class DiMaggioSandler(CapModel):
 
     A: float = magnitude_param(doc="failure surface: the von Mises plateau sqrt(J2) = A, "
                                    "stress units")
-
-    def failure(self, I1):
-        e = self.C * np.exp(-self.beta * I1)
-        return self.A - e, self.beta * e, -self.beta**2 * e
+    #: no linear term: the failure surface tends to the von Mises plateau
+    B: ClassVar[float] = 0.0
 
     @classmethod
     def conformance_samples(cls):
@@ -613,10 +674,6 @@ class ModifiedCap(CapModel):
                                    "A + B I1, stress units")
     B: float = magnitude_param(zero=True, doc="failure surface: slope of the high-pressure "
                                               "Drucker–Prager line sqrt(J2) = A + B I1")
-
-    def failure(self, I1):
-        e = self.C * np.exp(-self.beta * I1)
-        return self.A + self.B * I1 - e, self.B + self.beta * e, -self.beta**2 * e
 
     @classmethod
     def conformance_samples(cls):

@@ -63,7 +63,9 @@ Cam-Clay tip (codes of :mod:`.base`).
 """
 import dataclasses
 import enum
+import functools
 import math
+from typing import ClassVar
 
 import numpy as np
 
@@ -71,9 +73,16 @@ from ..errors import InputError
 from ..params import MAGNITUDE, magnitude_param, param
 from ..tensors import IDENTITY
 from .base import APEX, CAP, ELASTIC, FAILURE, SHEAR, TIP, Sample
-from .elastic import ExponentialBulk, IsotropicElasticity, LinearBulk
-from .invariant_return import (YIELD_TOL, Response, Surface, Trial, check_converged, invariants,
-                               scalar_root, smooth_return)
+from .elastic import IsotropicElasticity
+from .invariant_return import (FALLBACK, N_ROW, S_N, S_TR, X_ROW, YIELD_TOL, bracketed_root,
+                               bulk_compliance, bulk_pressure, bulk_strain, check_converged,
+                               finish, fixed_ratio, invariants, local_settings,
+                               pressure_variable, scratch, smooth_return, solved_ratio,
+                               strain_row, trial_split)
+from .jit import kernel
+from .yield_surfaces import (CAM_CLAY, CS_M, CS_SLOTS, CS_THETA, EXPONENTIAL, G_, K_,
+                             KAPPA_STAR, LOG_SHIFT, MODIFIED_CAM_CLAY, P_MIN, SURFACE,
+                             cam_clay_value, modified_cam_clay_value)
 
 SQRT3 = math.sqrt(3.0)
 #: Tensile trials whose smooth Cam-Clay return has p / p_c below exp(-ORIGIN_EXPONENT)
@@ -88,10 +97,155 @@ class CriticalStateElasticity(enum.Enum):
     PRESSURE_DEPENDENT = "pressure_dependent"
 
 
+# --- the return map of one point, compiled ------------------------------------------------
+
+@kernel
+def outside(prm, p_tr, J_tr, pc_n, scale):
+    """Whether the trial state lies outside the yield surface. Cam-Clay: p <= 0 is outside
+    except at the origin itself (the limit f = 0 of the locus)."""
+    tol = YIELD_TOL * scale
+    if prm[SURFACE] == MODIFIED_CAM_CLAY:
+        return modified_cam_clay_value(prm, p_tr, J_tr, pc_n) > tol * scale
+    if p_tr <= 0.0:
+        return p_tr < -tol or J_tr > tol
+    return cam_clay_value(prm, p_tr, J_tr, pc_n) > tol
+
+
+@kernel
+def critical_pressure(prm, p_c):
+    """p on the critical state line of the surface p_c (wet side: p above it)."""
+    return 0.5 * p_c if prm[SURFACE] == MODIFIED_CAM_CLAY else p_c / math.e
+
+
+@kernel
+def ell(xi, args):
+    """Cam-Clay's reduction (:func:`cam_clay_start`): (l, E'(p) p, p) at xi = ln p."""
+    prm, log_pcn, de_v, p_n, _ = args
+    p = math.exp(xi)
+    c = bulk_compliance(prm, p)
+    return xi - log_pcn - prm[CS_THETA] * (de_v - bulk_strain(prm, p, p_n)), c * p, p
+
+
+@kernel
+def tip_equation(xi, args):
+    """l(xi) = 0 at the tip, increasing in xi."""
+    l, cp, _ = ell(xi, args)
+    return l, 1.0 + args[0][CS_THETA] * cp
+
+
+tip_root = bracketed_root(tip_equation)
+
+
+@kernel
+def phi_equation(xi, args):
+    """phi(xi) = E(p) - de_v + dgamma M (l + 1) and its slope (:func:`cam_clay_start`)."""
+    prm, _, de_v, p_n, J_tr = args
+    G, M, theta = prm[G_], prm[CS_M], prm[CS_THETA]
+    l, cp, p = ell(xi, args)
+    dl = 1.0 + theta * cp
+    dgamma = (SQRT3 * J_tr + M * p * l) / (3.0 * G)
+    d_dgamma = M * p * (l + dl) / (3.0 * G)
+    value = bulk_strain(prm, p, p_n) - de_v + dgamma * M * (l + 1.0)
+    return value, cp + M * ((l + 1.0) * d_dgamma + dgamma * dl)
+
+
+phi_root = bracketed_root(phi_equation)
+
+
+@kernel
+def cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n, x0):
+    """Cam-Clay's plastic point by a scalar reduction in xi = ln p: with
+    f_J = sqrt3 constant, the hardening y = theta (de_v - E(p)) and the
+    consistency condition give dgamma and J as functions of p,
+
+        l = ln(p / p_c) = xi - ln p_c,n - theta (de_v - E(p)),
+        dgamma = (sqrt3 J_tr + M p l) / (3 G),   J = J_tr - sqrt3 G dgamma,
+
+    and the volumetric split leaves phi(xi) = E(p) - de_v + dgamma M (l + 1) = 0
+    on xi < xi_tip (l < 0, J > 0), xi_tip the tip l = 0. phi(xi_tip) <= 0
+    is the tip vertex (the deviator fits its normal cone); phi > 0 still
+    700 below xi_tip is the origin (sigma = 0 to rounding); otherwise the
+    bracketed root starts the Newton of the full system (which gives the tangent).
+    Returns (code: TIP, APEX (the origin) or FAILURE (smooth: its Newton start in x0), p, y,
+    p_e, converged)."""
+    G, M, theta = prm[G_], prm[CS_M], prm[CS_THETA]
+    log_pcn = math.log(pc_n)
+    args = (prm, log_pcn, de_v, p_n, J_tr)
+    # The tip: l(xi) = 0, increasing in xi; p_tip lies between p_tr and p_c,n.
+    lo = math.log(min(p_tr, pc_n)) if p_tr > 0.0 else log_pcn - ORIGIN_EXPONENT
+    hi = math.log(max(p_tr, pc_n))
+    xi_tip, converged = tip_root(args, lo, hi, hi)
+    xi_lo = xi_tip - ORIGIN_EXPONENT
+    if phi_equation(xi_tip, args)[0] <= 0.0:
+        # Tip: p = p_c, J = 0, dp/de_v = 1 / (E'(p) + 1 / (theta p)); one Newton step
+        # in p itself removes the rounding of the logarithmic variable.
+        p = math.exp(xi_tip)
+        g = bulk_strain(prm, p, p_n) + math.log(p / pc_n) / theta - de_v
+        p_new = p - g / (bulk_compliance(prm, p) + 1.0 / (theta * p))
+        if np.isfinite(p_new) and p_new > 0.0:
+            p = p_new
+        return (TIP, p, math.log(p / pc_n), 1.0 / (bulk_compliance(prm, p) + 1.0 / (theta * p)),
+                converged)
+    if phi_equation(xi_lo, args)[0] >= 0.0:
+        # Origin: sigma = 0 and the compaction de_v - E(0) (a dilation) softens p_c.
+        return APEX, 0.0, theta * (de_v - bulk_strain(prm, 0.0, p_n)), 0.0, converged
+    xi, ok = phi_root(args, xi_lo, xi_tip, xi_tip)
+    l, _, p = ell(xi, args)
+    dgamma = (SQRT3 * J_tr + M * p * l) / (3.0 * G)
+    x0[0], x0[1], x0[2] = xi, J_tr - SQRT3 * G * dgamma, dgamma
+    x0[3] = theta * (de_v - bulk_strain(prm, p, p_n))
+    return FAILURE, p, 0.0, 0.0, converged and ok
+
+
+@kernel
+def critical_state_point(prm, deps, stress_n, pc_n, settings, sigma, C, ws):
+    """The return map of one point: writes sigma and C; returns (p_c, plastic compaction,
+    equivalent plastic strain increment, yield_state, converged)."""
+    p_n, de_v, J_tr = trial_split(prm, deps, stress_n, ws[S_N], ws[S_TR], ws[N_ROW])
+    p_tr = bulk_pressure(prm, p_n, de_v)
+    scale = pc_n + abs(p_tr) + J_tr
+    # The elastic response, overwritten by the return mode.
+    p, J, y, code, ratio, converged = p_tr, J_tr, 0.0, ELASTIC, 1.0, True   # y = ln(p_c / p_c,n)
+    sens = (1.0 / bulk_compliance(prm, p_tr), 0.0, 0.0, 1.0)
+    if outside(prm, p_tr, J_tr, pc_n, scale):
+        code = FAILURE
+        x = ws[X_ROW, :4]
+        x[0], x[1], x[2], x[3] = pressure_variable(prm, p_tr), J_tr, 0.0, 0.0
+        ws[FALLBACK, 0] = math.nan
+        if prm[SURFACE] == CAM_CLAY:   # its vertices first, and a bracketed start
+            code, p, y, p_e, converged = cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n, x)
+            J, sens, ratio = 0.0, (p_e, 0.0, 0.0, 0.0), 0.0
+        if code == FAILURE:
+            lp = (p_n, de_v, J_tr, 0.0, scale, pc_n, 0.0, strain_row(prm, p_tr, scale))
+            p, J, _, y, sens, ok = smooth_return(prm, lp, settings, ws)
+            converged = converged and ok
+            code = CAP if p >= critical_pressure(prm, pc_n * math.exp(y)) else FAILURE
+            ratio = solved_ratio(J, J_tr, sens[3])
+        else:
+            ratio = fixed_ratio(J, J_tr)
+    compaction, eq = finish(prm, p, ratio, sens, code != ELASTIC, ws[S_TR], ws[N_ROW], p_n,
+                            de_v, J_tr, sigma, C)
+    return pc_n * math.exp(y), compaction, eq, code, converged
+
+
+@kernel
+def critical_state_update(prm, deps, stress, pc_n, settings, sigma, C, p_c, compaction, eq,
+                          code):
+    """:func:`critical_state_point` at every point; returns the number of points whose
+    local solve did not converge."""
+    ws = scratch()
+    failed = 0
+    for i in range(deps.shape[0]):
+        p_c[i], compaction[i], eq[i], code[i], ok = critical_state_point(
+            prm, deps[i], stress[i], pc_n[i], settings, sigma[i], C[i], ws)
+        failed += 0 if ok else 1
+    return failed
+
+
 @dataclasses.dataclass(frozen=True)
 class CriticalStateModel(IsotropicElasticity):
-    """Base of Cam-Clay and modified Cam-Clay (module doc); a subclass gives
-    its yield function in (p, J), J = q / sqrt3."""
+    """Base of Cam-Clay and modified Cam-Clay (module doc); a subclass names its
+    yield surface (``surface``) and the p_c of the surface through a stress."""
 
     phi: float = param(lo=0.0, hi=90.0, lo_open=True, hi_open=True,
                        doc="critical-state friction angle [degrees]: "
@@ -113,6 +267,8 @@ class CriticalStateModel(IsotropicElasticity):
                                                        "K = (1+e0)(p+p_min)/kappa; stress units")
 
     history = {"stress": (6,), "p_c": (), "eps_p_vol": (), "eps_p_eq": (), "yield_state": ()}
+    #: ``prm[SURFACE]`` of the subclass.
+    surface: ClassVar[float]
 
     def __post_init__(self):
         if isinstance(self.elasticity, str):   # direct construction with the TOML word
@@ -136,36 +292,24 @@ class CriticalStateModel(IsotropicElasticity):
         """(1 + e0) / (lam - kappa): d ln p_c / d eps_v^p."""
         return (1.0 + self.e0) / (self.lam - self.kappa)
 
-    @property
-    def log_shift(self):
-        """The local Newton's pressure variable: ln(p + shift), or p itself for None."""
-        if self.elasticity is CriticalStateElasticity.PRESSURE_DEPENDENT:
-            return self.p_min   # the volumetric residual is linear in ln(p + p_min)
-        return None
-
-    @property
-    def bulk(self):
-        """The volumetric elastic law (``elasticity``)."""
-        if self.elasticity is CriticalStateElasticity.LINEAR:
-            return LinearBulk(self.K)
-        return ExponentialBulk(self.kappa / (1.0 + self.e0), self.p_min)
-
-    # --- the yield function, in (p, J) with p_c = p_c,n exp(y) -------------------
-
-    def yield_value(self, p, J, p_c):
-        """f(p, J; p_c), positive outside."""
-        raise NotImplementedError
-
-    def surface(self, p, J, y, pc_n, f_scale):
-        """The :class:`.invariant_return.Surface` at p_c = pc_n exp(y) (h = y)."""
-        raise NotImplementedError
+    @functools.cached_property
+    def prm(self):
+        """The parameters as the compiled return reads them (:mod:`.yield_surfaces`): the
+        volumetric law (``elasticity``) and the local Newton's pressure variable, ln(p + p_min)
+        with the kappa-line (the volumetric residual is then linear in it), ln p on Cam-Clay
+        (its flow direction is singular at p = 0), else p itself."""
+        prm = np.zeros(CS_SLOTS)
+        exponential = self.elasticity is CriticalStateElasticity.PRESSURE_DEPENDENT
+        shift = self.p_min if exponential else math.nan
+        if self.surface == CAM_CLAY:
+            shift = self.p_min if exponential else 0.0
+        prm[[G_, K_, EXPONENTIAL, KAPPA_STAR, P_MIN, LOG_SHIFT, SURFACE, CS_M, CS_THETA]] = (
+            self.G, self.K, float(exponential), self.kappa / (1.0 + self.e0), self.p_min, shift,
+            self.surface, self.M, self.theta)
+        return prm
 
     def yield_pressure(self, p, J):
         """p_c of the yield surface through (p, J), p > 0."""
-        raise NotImplementedError
-
-    def critical_pressure(self, p_c):
-        """p on the critical state line of the surface p_c (wet side: p above it)."""
         raise NotImplementedError
 
     # --- driver interface -----------------------------------------------------------
@@ -186,56 +330,16 @@ class CriticalStateModel(IsotropicElasticity):
         return state
 
     def integrate(self, deps, state, guess=None):
-        G, bulk, theta = self.G, self.bulk, self.theta
-        n = len(deps)
-        trial = Trial.split(deps, state["stress"], G)
-        pc_n = state["p_c"]
-        p_tr = bulk.pressure(trial.p_n, trial.de_v)
-        J_tr = trial.J_tr
-        response = Response(trial, bulk, p_tr)
-        scale = pc_n + np.abs(p_tr) + J_tr
-        remaining = self.outside(p_tr, J_tr, pc_n, scale)
-        y = np.zeros(n)   # ln(p_c / p_c,n)
-        idx, x0 = self.prepare(trial, bulk, p_tr, pc_n, response, y, remaining)
-        if idx.size:
-            pcn, sc = pc_n[idx], scale[idx]
-
-            def surface(p, J, yy, k):
-                return self.surface(p, J, yy, pcn[k], sc[k])
-
-            def hardening(yy, compaction, k):   # ln(p_c / p_c,n) = theta compaction
-                return yy / theta - compaction, np.full_like(yy, 1.0 / theta), -np.ones_like(yy)
-
-            p, J, _, yy, sens, converged = smooth_return(
-                surface, hardening, bulk, G, trial, idx, p_tr[idx], np.zeros(idx.size), x0,
-                sc, log_shift=self.log_shift, admissible=self.admissible)
-            check_converged(self, converged, n)
-            compacting = p >= self.critical_pressure(pcn * np.exp(yy))
-            response.solved(idx, p, J, *sens, np.where(compacting, CAP, FAILURE))
-            y[idx] = yy
-
-        sigma, tangent, compaction, eq = response.finish(bulk, G)
-        new_state = {"stress": sigma, "p_c": pc_n * np.exp(y),
-                     "eps_p_vol": state["eps_p_vol"] - compaction,
-                     "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": response.code}
-        return sigma, tangent, new_state
-
-    def outside(self, p_tr, J_tr, pc_n, scale):
-        """Trial states outside the yield surface."""
-        raise NotImplementedError
-
-    def admissible(self, p, J, y, k):
-        """Where the local Newton's iterates may go (beyond the elastic law's own range)."""
-        return np.ones(len(p), dtype=bool)
-
-    def prepare(self, trial, bulk, p_tr, pc_n, response, y, plastic):
-        """The points for the smooth return and their Newton start (xi, J, dgamma, y):
-        here every plastic point, from its trial state. (Cam-Clay first takes its
-        vertices out and starts from a bracketed scalar solution.)"""
-        idx = np.flatnonzero(plastic)
-        xi = p_tr[idx] if self.log_shift is None else np.log(p_tr[idx] + self.log_shift)
-        return idx, np.stack([xi, trial.J_tr[idx], np.zeros(idx.size), np.zeros(idx.size)],
-                             axis=1)
+        m = len(deps)
+        sigma, C = np.empty((m, 6)), np.empty((m, 6, 6))
+        p_c, compaction, eq, code = (np.empty(m) for _ in range(4))
+        failed = critical_state_update(self.prm, np.ascontiguousarray(deps), state["stress"],
+                                       state["p_c"], local_settings(), sigma, C, p_c,
+                                       compaction, eq, code)
+        check_converged(self, failed, m)
+        new_state = {"stress": sigma, "p_c": p_c, "eps_p_vol": state["eps_p_vol"] - compaction,
+                     "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": code}
+        return sigma, C, new_state
 
 
 #: A lightly overconsolidated clay (kPa): M = 1.2, the conformance samples' parameters.
@@ -266,36 +370,14 @@ def critical_state_samples(tip, tension):
 class ModifiedCamClay(CriticalStateModel):
     """Modified Cam-Clay, f = q^2 + M^2 p (p - p_c) (eq. B.7; module doc)."""
 
+    surface = MODIFIED_CAM_CLAY
+
     @classmethod
     def conformance_samples(cls):
         return critical_state_samples(("wet", CAP), ("dry", FAILURE))
 
-    def yield_value(self, p, J, p_c):
-        return 3.0 * J**2 + self.M**2 * p * (p - p_c)
-
-    def surface(self, p, J, y, pc_n, f_scale):
-        # The distance form f = sqrt((p - p_c/2)^2 + 3 J^2 / M^2) - p_c / 2 of the same
-        # ellipse: it grows linearly far outside, so Newton converges from far trial states.
-        M2 = self.M**2
-        pc = pc_n * np.exp(y)
-        a = p - 0.5 * pc
-        b2 = 3.0 * J**2 / M2
-        rho = np.sqrt(a**2 + b2)
-        r3 = rho**3
-        f_pc = -0.5 * (a / rho + 1.0)
-        return Surface(f=rho - 0.5 * pc, f_p=a / rho, f_J=3.0 * J / (M2 * rho), f_h=f_pc * pc,
-                       f_pp=b2 / r3, f_pJ=-3.0 * a * J / (M2 * r3), f_JJ=3.0 * a**2 / (M2 * r3),
-                       f_ph=-0.5 * b2 / r3 * pc, f_Jh=1.5 * a * J / (M2 * r3) * pc,
-                       scale=f_scale)
-
     def yield_pressure(self, p, J):
         return p + 3.0 * J**2 / (self.M**2 * p)
-
-    def critical_pressure(self, p_c):
-        return 0.5 * p_c
-
-    def outside(self, p_tr, J_tr, pc_n, scale):
-        return self.yield_value(p_tr, J_tr, pc_n) > YIELD_TOL * scale**2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -303,122 +385,11 @@ class CamClay(CriticalStateModel):
     """Original Cam-Clay, f = q + M p ln(p / p_c) (eq. B.6; module doc), with
     its vertices at the tip (p_c, 0) and at the origin."""
 
+    surface = CAM_CLAY
+
     @classmethod
     def conformance_samples(cls):
         return critical_state_samples(("tip", TIP), ("origin", APEX))
 
-    @property
-    def log_shift(self):
-        return 0.0   # ln p: the flow direction is singular at p = 0
-
-    def admissible(self, p, J, y, k):
-        return p > 0.0   # exp(xi) may underflow
-
-    def yield_value(self, p, J, p_c):
-        return SQRT3 * J + self.M * p * np.log(p / p_c)
-
-    def surface(self, p, J, y, pc_n, f_scale):
-        M = self.M
-        log_ratio = np.log(p / pc_n) - y
-        zero = np.zeros_like(p)
-        return Surface(f=SQRT3 * J + M * p * log_ratio, f_p=M * (log_ratio + 1.0),
-                       f_J=np.full_like(p, SQRT3), f_h=-M * p, f_pp=M / p, f_pJ=zero, f_JJ=zero,
-                       f_ph=np.full_like(p, -M), f_Jh=zero, scale=f_scale)
-
     def yield_pressure(self, p, J):
         return p * np.exp(np.minimum(SQRT3 * J / (self.M * p), 700.0))
-
-    def critical_pressure(self, p_c):
-        return p_c / math.e
-
-    def outside(self, p_tr, J_tr, pc_n, scale):
-        # p <= 0 is outside except at the origin itself (the limit f = 0 of the locus).
-        tol = YIELD_TOL * scale
-        out = (p_tr <= 0.0) & ((p_tr < -tol) | (J_tr > tol))
-        pos = p_tr > 0.0
-        out[pos] = self.yield_value(p_tr[pos], J_tr[pos], pc_n[pos]) > tol[pos]
-        return out
-
-    def prepare(self, trial, bulk, p_tr, pc_n, response, y, plastic):
-        """Cam-Clay's plastic points by a scalar reduction in xi = ln p: with
-        f_J = sqrt3 constant, the hardening y = theta (de_v - E(p)) and the
-        consistency condition give dgamma and J as functions of p,
-
-            l = ln(p / p_c) = xi - ln p_c,n - theta (de_v - E(p)),
-            dgamma = (sqrt3 J_tr + M p l) / (3 G),   J = J_tr - sqrt3 G dgamma,
-
-        and the volumetric split leaves phi(xi) = E(p) - de_v + dgamma M (l + 1) = 0
-        on xi < xi_tip (l < 0, J > 0), xi_tip the tip l = 0. phi(xi_tip) <= 0
-        is the tip vertex (the deviator fits its normal cone); phi > 0 still
-        700 below xi_tip is the origin (sigma = 0 to rounding); otherwise the
-        bracketed root starts the Newton of the full system (which gives the tangent)."""
-        G, M, theta = self.G, self.M, self.theta
-        idx = np.flatnonzero(plastic)
-        if idx.size == 0:
-            return idx, np.zeros((0, 4))
-        de_v, J_tr, p_n, pcn = trial.de_v[idx], trial.J_tr[idx], trial.p_n[idx], pc_n[idx]
-        log_pcn = np.log(pcn)
-
-        def ell(xi, k):
-            p = np.exp(xi)
-            c = bulk.compliance(p)
-            return xi - log_pcn[k] - theta * (de_v[k] - bulk.strain(p, p_n[k])), c * p, p
-
-        # The tip: l(xi) = 0, increasing in xi; p_tip lies between p_tr and p_c,n.
-        ptr = p_tr[idx]
-        lo = np.where(ptr > 0.0, np.log(np.minimum(np.where(ptr > 0.0, ptr, 1.0), pcn)),
-                      log_pcn - ORIGIN_EXPONENT)
-        hi = np.log(np.maximum(ptr, pcn))
-
-        def tip_equation(xi, k):
-            l, cp, _ = ell(xi, k)
-            return l, 1.0 + theta * cp
-
-        with np.errstate(all="ignore"):
-            xi_tip, ok = scalar_root(tip_equation, lo, hi, x0=hi)
-        check_converged(self, ok, len(p_tr))
-
-        def phi(xi, k):
-            l, cp, p = ell(xi, k)
-            dl = 1.0 + theta * cp
-            dgamma = (SQRT3 * J_tr[k] + M * p * l) / (3.0 * G)
-            d_dgamma = M * p * (l + dl) / (3.0 * G)
-            value = bulk.strain(p, p_n[k]) - de_v[k] + dgamma * M * (l + 1.0)
-            return value, cp + M * ((l + 1.0) * d_dgamma + dgamma * dl)
-
-        every = np.arange(idx.size)
-        with np.errstate(all="ignore"):
-            phi_tip = phi(xi_tip, every)[0]
-            xi_lo = xi_tip - ORIGIN_EXPONENT
-            phi_lo = phi(xi_lo, every)[0]
-        tip = phi_tip <= 0.0
-        origin = ~tip & (phi_lo >= 0.0)
-        smooth = ~tip & ~origin
-
-        # Tip: p = p_c, J = 0, dp/de_v = 1 / (E'(p) + 1 / (theta p)); one Newton step
-        # in p itself removes the rounding of the logarithmic variable.
-        it = idx[tip]
-        p = np.exp(xi_tip[tip])
-        with np.errstate(all="ignore"):
-            g = bulk.strain(p, p_n[tip]) + np.log(p / pcn[tip]) / theta - de_v[tip]
-            p_new = p - g / (bulk.compliance(p) + 1.0 / (theta * p))
-        p = np.where(np.isfinite(p_new) & (p_new > 0.0), p_new, p)
-        response.fixed(it, p, 0.0, TIP)
-        response.p_e[it] = 1.0 / (bulk.compliance(p) + 1.0 / (theta * p))
-        y[it] = np.log(p / pcn[tip])
-        # Origin: sigma = 0 and the compaction de_v - E(0) (a dilation) softens p_c.
-        io = idx[origin]
-        response.fixed(io, 0.0, 0.0, APEX)
-        with np.errstate(divide="ignore"):
-            y[io] = theta * (de_v[origin] - bulk.strain(np.zeros(io.size), p_n[origin]))
-
-        sm = np.flatnonzero(smooth)
-        with np.errstate(all="ignore"):
-            xi, ok = scalar_root(lambda x, k: phi(x, sm[k]), xi_lo[sm], xi_tip[sm], x0=xi_tip[sm])
-        check_converged(self, ok, len(p_tr))
-        l, _, p = ell(xi, sm)
-        dgamma = (SQRT3 * J_tr[sm] + M * p * l) / (3.0 * G)
-        x0 = np.stack([xi, J_tr[sm] - SQRT3 * G * dgamma, dgamma,
-                       theta * (de_v[sm] - bulk.strain(p, p_n[sm]))], axis=1)
-        return idx[sm], x0
-

@@ -1,0 +1,15 @@
+"""The compiler of the constitutive kernels: numba's nopython mode, cached on disk.
+
+Every return map is written once, per point, in the subset of Python numba
+compiles; the loop over a region's points runs inside the compiled code.
+``error_model="numpy"`` keeps IEEE arithmetic (a division by zero gives inf
+or nan, as the NumPy code it replaced, and :meth:`.base.Model.update`
+reports a non-finite result); fastmath stays off so that the results do not
+depend on the compiler's reordering. The compiled code is cached beside the
+sources (``__pycache__``), so only the first run on a machine compiles.
+Setting ``NUMBA_DISABLE_JIT=1`` runs the same source as plain Python (slow,
+for a debugger).
+"""
+import numba
+
+kernel = numba.njit(cache=True, error_model="numpy")
