@@ -133,12 +133,12 @@ from ..tensors import IDENTITY
 from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
 from .cone import tension_cutoff_param
 from .elastic import IsotropicElasticity
-from .invariant_return import (FALLBACK, N_ROW, S_N, S_TR, X_ROW, YIELD_TOL, bracketed_root,
-                               bulk_compliance, bulk_pressure, bulk_strain, check_converged,
-                               finish, invariants, local_settings, point_invariants, scratch,
-                               smooth_return, solved_ratio, strain_row, trial_split)
+from .invariant_return import (YIELD_TOL, bracketed_root, bulk_compliance, bulk_pressure,
+                               bulk_strain, check_converged, finish, invariants, local_settings,
+                               point_invariants, smooth_return, solved_ratio, strain_row,
+                               trial_split)
 from .jit import kernel
-from .yield_surfaces import (CAP_A, CAP_B, CAP_BETA, CAP_C, CAP_D, CAP_R, CAP_SLOTS,
+from .yield_surfaces import (CAP_A, CAP_B, CAP_BETA, CAP_C, CAP_D, CAP_R, PRM_SLOTS,
                              CAP_SURFACE, CAP_W, DF_LO, ETA_D, EXPONENTIAL, F_MIN, G_, J_LO, K_,
                              L_MIN, LOG_SHIFT, P_LO, SURFACE, VOLUMETRIC, X_MIN, cap_compaction,
                              cap_failure, smooth_surface)
@@ -269,8 +269,8 @@ def corner_return(prm, p_n, de_v, kappa_n):
 
 
 @kernel
-def warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L, x):
-    """x = (p, J, dgamma, kappa): the cap return's start from a ``guess`` state on a free cap: its
+def warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L):
+    """(p, J, dgamma, kappa) of the cap return from a ``guess`` state on a free cap: its
     stress and cap centre, and the multiplier that best splits this step's strain along
     the flow direction there, dgamma = (c f_p + s f_J) / (f_p^2 + f_J^2),
     c = de_v - E(p; p_n), s = (J_tr - J) / G."""
@@ -278,18 +278,18 @@ def warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L, x):
     f_p, f_J = smooth_surface(prm, p, J, guess_L, 0.0)[1:3]
     c = de_v - bulk_strain(prm, p, p_n)
     shear = (J_tr - J) / prm[G_]
-    x[0], x[1], x[2], x[3] = p, J, max((c * f_p + shear * f_J) / (f_p**2 + f_J**2), 0.0), guess_L
+    return p, J, max((c * f_p + shear * f_J) / (f_p**2 + f_J**2), 0.0), guess_L
 
 
 @kernel
 def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settings,
-              sigma, C, ws):
+              sigma, C, s_n, s_tr, n):
     """The return map of one point (module doc, *Regions*): writes sigma and C; returns
     (L, X, plastic compaction, equivalent plastic strain increment, yield_state,
     converged). ``last`` is the yield_state of the last iterate (ELASTIC if none), whose
     cap state ``guess_stress``, ``guess_L`` may start the cap's Newton."""
     R, L_min = prm[CAP_R], prm[L_MIN]
-    p_n, de_v, J_tr = trial_split(prm, deps, stress_n, ws[S_N], ws[S_TR], ws[N_ROW])
+    p_n, de_v, J_tr = trial_split(prm, deps, stress_n, s_n, s_tr, n)
     p_tr = bulk_pressure(prm, p_n, de_v)
     p_lo, J_lo, dF_lo = prm[P_LO], prm[J_LO], prm[DF_LO]
     F_L, dF_L, _ = cap_failure(prm, L_n)
@@ -350,13 +350,11 @@ def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settin
         # a free cap, from it.
         lp = (p_n, de_v, J_tr, kappa_n, scale, 0.0, cap_compaction(prm, kappa_n)[0],
               strain_row(prm, p_tr, scale))
-        x, cold = ws[X_ROW, :4], ws[FALLBACK, :4]
-        cold[0], cold[1], cold[2], cold[3] = p_tr, J_tr, 0.0, kappa_n
+        cold = (p_tr, J_tr, 0.0, kappa_n)
+        x0 = cold
         if last == CAP and guess_L > L_min:
-            warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L, x)
-        else:
-            x[:] = cold
-        p, J, _, kappa, sens, ok = smooth_return(prm, lp, settings, ws)
+            x0 = warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L)
+        p, J, _, kappa, sens, ok = smooth_return(prm, lp, s_n, s_tr, x0, cold, settings)
         converged = converged and ok
         code = CAP
     if volumetric and (corner or cut or fail or cap_corner):
@@ -374,8 +372,8 @@ def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settin
             converged = converged and ok
     if code != ELASTIC:
         ratio = solved_ratio(J, J_tr, sens[3])
-    compaction, eq = finish(prm, p, ratio, sens, code != ELASTIC, ws[S_TR], ws[N_ROW], p_n,
-                            de_v, J_tr, sigma, C)
+    compaction, eq = finish(prm, p, ratio, sens, code != ELASTIC, s_tr, n, p_n, de_v, J_tr,
+                            sigma, C)
     if kappa == kappa_n:
         return L_n, X_n, compaction, eq, code, converged
     return (max(kappa, L_min), kappa + R * cap_failure(prm, kappa)[0], compaction, eq, code,
@@ -387,12 +385,12 @@ def cap_update(prm, deps, stress, L_n, X_n, last, guess_stress, guess_L, setting
                sigma, C, L, X, compaction, eq, code):
     """:func:`cap_point` at every point; returns the number of points whose local solve
     did not converge."""
-    ws = scratch()
+    s_n, s_tr, n = np.empty(6), np.empty(6), np.empty(6)
     failed = 0
     for i in range(deps.shape[0]):
         L[i], X[i], compaction[i], eq[i], code[i], ok = cap_point(
             prm, deps[i], stress[i], L_n[i], X_n[i], last[i], guess_stress[i], guess_L[i],
-            settings, sigma[i], C[i], ws)
+            settings, sigma[i], C[i], s_n, s_tr, n)
         failed += 0 if ok else 1
     return failed
 
@@ -485,7 +483,7 @@ class CapModel(IsotropicElasticity):
     @functools.cached_property
     def prm(self):
         """The parameters as the compiled return reads them (:mod:`.yield_surfaces`)."""
-        prm = np.zeros(CAP_SLOTS)
+        prm = np.zeros(PRM_SLOTS)
         prm[[G_, K_, EXPONENTIAL, LOG_SHIFT, SURFACE]] = self.G, self.K, 0.0, math.nan, CAP_SURFACE
         prm[[CAP_A, CAP_B, CAP_C, CAP_BETA, CAP_R, CAP_W, CAP_D, ETA_D, VOLUMETRIC]] = (
             self.A, self.B, self.C, self.beta, self.R, self.W, self.D, self.dilatancy,

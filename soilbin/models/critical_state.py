@@ -74,17 +74,18 @@ from ..params import MAGNITUDE, magnitude_param, param
 from ..tensors import IDENTITY
 from .base import APEX, CAP, ELASTIC, FAILURE, SHEAR, TIP, Sample
 from .elastic import IsotropicElasticity
-from .invariant_return import (FALLBACK, N_ROW, S_N, S_TR, X_ROW, YIELD_TOL, bracketed_root,
-                               bulk_compliance, bulk_pressure, bulk_strain, check_converged,
-                               finish, fixed_ratio, invariants, local_settings,
-                               pressure_variable, scratch, smooth_return, solved_ratio,
+from .invariant_return import (YIELD_TOL, bracketed_root, bulk_compliance, bulk_pressure,
+                               bulk_strain, check_converged, finish, fixed_ratio, invariants,
+                               local_settings, pressure_variable, smooth_return, solved_ratio,
                                strain_row, trial_split)
 from .jit import kernel
-from .yield_surfaces import (CAM_CLAY, CS_M, CS_SLOTS, CS_THETA, EXPONENTIAL, G_, K_,
+from .yield_surfaces import (CAM_CLAY, CS_M, PRM_SLOTS, CS_THETA, EXPONENTIAL, G_, K_,
                              KAPPA_STAR, LOG_SHIFT, MODIFIED_CAM_CLAY, P_MIN, SURFACE,
                              cam_clay_value, modified_cam_clay_value)
 
 SQRT3 = math.sqrt(3.0)
+#: No Newton start (the vertices), or no fallback start of the smooth return.
+NO_START = (math.nan, math.nan, math.nan, math.nan)
 #: Tensile trials whose smooth Cam-Clay return has p / p_c below exp(-ORIGIN_EXPONENT)
 #: go to the origin.
 ORIGIN_EXPONENT = 700.0
@@ -153,7 +154,7 @@ phi_root = bracketed_root(phi_equation)
 
 
 @kernel
-def cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n, x0):
+def cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n):
     """Cam-Clay's plastic point by a scalar reduction in xi = ln p: with
     f_J = sqrt3 constant, the hardening y = theta (de_v - E(p)) and the
     consistency condition give dgamma and J as functions of p,
@@ -166,8 +167,8 @@ def cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n, x0):
     is the tip vertex (the deviator fits its normal cone); phi > 0 still
     700 below xi_tip is the origin (sigma = 0 to rounding); otherwise the
     bracketed root starts the Newton of the full system (which gives the tangent).
-    Returns (code: TIP, APEX (the origin) or FAILURE (smooth: its Newton start in x0), p, y,
-    p_e, converged)."""
+    Returns (code: TIP, APEX (the origin) or FAILURE (smooth), p, y, p_e, the Newton start
+    (xi, J, dgamma, y), converged)."""
     G, M, theta = prm[G_], prm[CS_M], prm[CS_THETA]
     log_pcn = math.log(pc_n)
     args = (prm, log_pcn, de_v, p_n, J_tr)
@@ -185,23 +186,22 @@ def cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n, x0):
         if np.isfinite(p_new) and p_new > 0.0:
             p = p_new
         return (TIP, p, math.log(p / pc_n), 1.0 / (bulk_compliance(prm, p) + 1.0 / (theta * p)),
-                converged)
+                NO_START, converged)
     if phi_equation(xi_lo, args)[0] >= 0.0:
         # Origin: sigma = 0 and the compaction de_v - E(0) (a dilation) softens p_c.
-        return APEX, 0.0, theta * (de_v - bulk_strain(prm, 0.0, p_n)), 0.0, converged
+        return APEX, 0.0, theta * (de_v - bulk_strain(prm, 0.0, p_n)), 0.0, NO_START, converged
     xi, ok = phi_root(args, xi_lo, xi_tip, xi_tip)
     l, _, p = ell(xi, args)
     dgamma = (SQRT3 * J_tr + M * p * l) / (3.0 * G)
-    x0[0], x0[1], x0[2] = xi, J_tr - SQRT3 * G * dgamma, dgamma
-    x0[3] = theta * (de_v - bulk_strain(prm, p, p_n))
-    return FAILURE, p, 0.0, 0.0, converged and ok
+    x0 = (xi, J_tr - SQRT3 * G * dgamma, dgamma, theta * (de_v - bulk_strain(prm, p, p_n)))
+    return FAILURE, p, 0.0, 0.0, x0, converged and ok
 
 
 @kernel
-def critical_state_point(prm, deps, stress_n, pc_n, settings, sigma, C, ws):
+def critical_state_point(prm, deps, stress_n, pc_n, settings, sigma, C, s_n, s_tr, n):
     """The return map of one point: writes sigma and C; returns (p_c, plastic compaction,
     equivalent plastic strain increment, yield_state, converged)."""
-    p_n, de_v, J_tr = trial_split(prm, deps, stress_n, ws[S_N], ws[S_TR], ws[N_ROW])
+    p_n, de_v, J_tr = trial_split(prm, deps, stress_n, s_n, s_tr, n)
     p_tr = bulk_pressure(prm, p_n, de_v)
     scale = pc_n + abs(p_tr) + J_tr
     # The elastic response, overwritten by the return mode.
@@ -209,22 +209,20 @@ def critical_state_point(prm, deps, stress_n, pc_n, settings, sigma, C, ws):
     sens = (1.0 / bulk_compliance(prm, p_tr), 0.0, 0.0, 1.0)
     if outside(prm, p_tr, J_tr, pc_n, scale):
         code = FAILURE
-        x = ws[X_ROW, :4]
-        x[0], x[1], x[2], x[3] = pressure_variable(prm, p_tr), J_tr, 0.0, 0.0
-        ws[FALLBACK, 0] = math.nan
+        x0 = (pressure_variable(prm, p_tr), J_tr, 0.0, 0.0)
         if prm[SURFACE] == CAM_CLAY:   # its vertices first, and a bracketed start
-            code, p, y, p_e, converged = cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n, x)
+            code, p, y, p_e, x0, converged = cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n)
             J, sens, ratio = 0.0, (p_e, 0.0, 0.0, 0.0), 0.0
         if code == FAILURE:
             lp = (p_n, de_v, J_tr, 0.0, scale, pc_n, 0.0, strain_row(prm, p_tr, scale))
-            p, J, _, y, sens, ok = smooth_return(prm, lp, settings, ws)
+            p, J, _, y, sens, ok = smooth_return(prm, lp, s_n, s_tr, x0, NO_START, settings)
             converged = converged and ok
             code = CAP if p >= critical_pressure(prm, pc_n * math.exp(y)) else FAILURE
             ratio = solved_ratio(J, J_tr, sens[3])
         else:
             ratio = fixed_ratio(J, J_tr)
-    compaction, eq = finish(prm, p, ratio, sens, code != ELASTIC, ws[S_TR], ws[N_ROW], p_n,
-                            de_v, J_tr, sigma, C)
+    compaction, eq = finish(prm, p, ratio, sens, code != ELASTIC, s_tr, n, p_n, de_v, J_tr,
+                            sigma, C)
     return pc_n * math.exp(y), compaction, eq, code, converged
 
 
@@ -233,11 +231,11 @@ def critical_state_update(prm, deps, stress, pc_n, settings, sigma, C, p_c, comp
                           code):
     """:func:`critical_state_point` at every point; returns the number of points whose
     local solve did not converge."""
-    ws = scratch()
+    s_n, s_tr, n = np.empty(6), np.empty(6), np.empty(6)
     failed = 0
     for i in range(deps.shape[0]):
         p_c[i], compaction[i], eq[i], code[i], ok = critical_state_point(
-            prm, deps[i], stress[i], pc_n[i], settings, sigma[i], C[i], ws)
+            prm, deps[i], stress[i], pc_n[i], settings, sigma[i], C[i], s_n, s_tr, n)
         failed += 0 if ok else 1
     return failed
 
@@ -298,7 +296,7 @@ class CriticalStateModel(IsotropicElasticity):
         volumetric law (``elasticity``) and the local Newton's pressure variable, ln(p + p_min)
         with the kappa-line (the volumetric residual is then linear in it), ln p on Cam-Clay
         (its flow direction is singular at p = 0), else p itself."""
-        prm = np.zeros(CS_SLOTS)
+        prm = np.zeros(PRM_SLOTS)
         exponential = self.elasticity is CriticalStateElasticity.PRESSURE_DEPENDENT
         shift = self.p_min if exponential else math.nan
         if self.surface == CAM_CLAY:

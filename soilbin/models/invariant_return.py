@@ -234,101 +234,123 @@ def finish(prm, p, ratio, sens, plastic, s_tr, n, p_n, de_v, J_tr, sigma, C):
     return compaction, math.sqrt(2.0 / 3.0) * math.sqrt(compaction**2 / 3.0 + shear**2)
 
 
-# --- the scratch rows the local solver works in ----------------------------------------
+# --- small dense solves, on tuples -----------------------------------------------------
+#
+# The local problem's vectors and its 4 x 4 Jacobian are tuples (rows of 4-tuples): values
+# the compiled code keeps in registers, where small arrays would cost an allocation or the
+# reference counting of a view at every call.
 
-#: Rows of the scratch array (:func:`scratch`, width 6): the augmented matrix of a solve
-#: (4 rows), the Newton residual, trial iterate and its residual, the step, the trial
-#: Jacobian (4 rows), a solve's right-hand sides (columns 0-1) and solutions (2-3)
-#: (4 rows), the return's Jacobian (4 rows), its iterate, its fallback start, and the trial
-#: split's s_n, s_tr, n.
-(AUG, RES, X_TRY, RES_TRY, STEP, JAC_TRY, RHS, JAC, X_ROW, FALLBACK, S_N, S_TR,
- N_ROW) = (0, 4, 5, 6, 7, 8, 12, 16, 20, 21, 22, 23, 24)
-SCRATCH_ROWS = 25
+@kernel
+def swapped(rows, a, b):
+    """The rows with rows a and b exchanged."""
+    return (rows[b] if a == 0 else rows[a] if b == 0 else rows[0],
+            rows[b] if a == 1 else rows[a] if b == 1 else rows[1],
+            rows[b] if a == 2 else rows[a] if b == 2 else rows[2],
+            rows[b] if a == 3 else rows[a] if b == 3 else rows[3])
 
 
 @kernel
-def scratch():
-    """The scratch array of a batch of points: allocated once, so that the return of a
-    point allocates nothing."""
-    return np.empty((SCRATCH_ROWS, 6))
-
-
-# --- small dense solves ------------------------------------------------------------------
-
-@kernel
-def dense_solve(jac, rhs, c, out, aug):
-    """out[:, :c] with jac out = rhs[:, :c] (jac (4, 4)): Gaussian elimination with
-    partial pivoting in the scratch ``aug`` (4, 6); the pseudo-inverse if a pivot is zero."""
-    k, width = 4, 4 + c
-    for i in range(k):
-        for j in range(k):
-            aug[i, j] = jac[i, j]
-        for j in range(c):
-            aug[i, k + j] = rhs[i, j]
-    for col in range(k):
-        for r in range(col + 1, k):      # the largest |aug[:, col]| of rows col.. to row col
-            if abs(aug[r, col]) > abs(aug[col, col]):
-                for j in range(col, width):
-                    aug[col, j], aug[r, j] = aug[r, j], aug[col, j]
-        if aug[col, col] == 0.0:
-            inverse = np.linalg.pinv(np.ascontiguousarray(jac))
-            for i in range(k):
-                for j in range(c):
-                    out[i, j] = 0.0
-                    for m in range(k):
-                        out[i, j] += inverse[i, m] * rhs[m, j]
-            return
-        for r in range(col + 1, k):
-            factor = aug[r, col] / aug[col, col]
-            for j in range(col + 1, width):
-                aug[r, j] -= factor * aug[col, j]
-    for j in range(c):
-        for r in range(k - 1, -1, -1):
-            v = aug[r, k + j]
-            for m in range(r + 1, k):
-                v -= aug[r, m] * out[m, j]
-            out[r, j] = v / aug[r, r]
+def row_less(row, factor, pivot):
+    """row - factor pivot, rows of 6."""
+    return (row[0] - factor * pivot[0], row[1] - factor * pivot[1], row[2] - factor * pivot[2],
+            row[3] - factor * pivot[3], row[4] - factor * pivot[4], row[5] - factor * pivot[5])
 
 
 @kernel
-def newton_step(jac, r, step, ws):
-    """step = -jac^-1 r."""
-    rhs, out = ws[RHS:RHS + 4, 0:2], ws[RHS:RHS + 4, 2:4]
+def back_substitute(a, col):
+    """x of the upper-triangular rows a (4 x 6) with the right-hand side in column col."""
+    x3 = a[3][col] / a[3][3]
+    x2 = (a[2][col] - a[2][3] * x3) / a[2][2]
+    x1 = (a[1][col] - a[1][2] * x2 - a[1][3] * x3) / a[1][1]
+    x0 = (a[0][col] - a[0][1] * x1 - a[0][2] * x2 - a[0][3] * x3) / a[0][0]
+    return x0, x1, x2, x3
+
+
+@kernel
+def dense_solve(jac, b0, b1):
+    """(x0, x1) with jac x0 = b0 and jac x1 = b1 (jac: 4 rows of 4): Gaussian elimination
+    with partial pivoting; the pseudo-inverse if a pivot is zero."""
+    a = ((jac[0][0], jac[0][1], jac[0][2], jac[0][3], b0[0], b1[0]),
+         (jac[1][0], jac[1][1], jac[1][2], jac[1][3], b0[1], b1[1]),
+         (jac[2][0], jac[2][1], jac[2][2], jac[2][3], b0[2], b1[2]),
+         (jac[3][0], jac[3][1], jac[3][2], jac[3][3], b0[3], b1[3]))
+    for c in range(4):
+        for r in range(c + 1, 4):      # the largest |a[:, c]| of rows c.. to row c
+            if abs(a[r][c]) > abs(a[c][c]):
+                a = swapped(a, c, r)
+        if a[c][c] == 0.0:
+            return pinv_solve(jac, b0, b1)
+        a = (a[0] if c >= 0 else row_less(a[0], a[0][c] / a[c][c], a[c]),
+             a[1] if c >= 1 else row_less(a[1], a[1][c] / a[c][c], a[c]),
+             a[2] if c >= 2 else row_less(a[2], a[2][c] / a[c][c], a[c]),
+             a[3] if c >= 3 else row_less(a[3], a[3][c] / a[c][c], a[c]))
+    return back_substitute(a, 4), back_substitute(a, 5)
+
+
+@kernel
+def pinv_solve(jac, b0, b1):
+    """:func:`dense_solve` by the pseudo-inverse."""
+    m = np.empty((4, 4))
     for i in range(4):
-        rhs[i, 0] = r[i]
-    dense_solve(jac, rhs, 1, out, ws[AUG:AUG + 4])
-    for i in range(4):
-        step[i] = -out[i, 0]
+        for j in range(4):
+            m[i, j] = jac[i][j]
+    inverse = np.linalg.pinv(m)
+    return matvec(inverse, b0), matvec(inverse, b1)
+
+
+@kernel
+def matvec(m, b):
+    """m b, m (4, 4)."""
+    return (m[0, 0] * b[0] + m[0, 1] * b[1] + m[0, 2] * b[2] + m[0, 3] * b[3],
+            m[1, 0] * b[0] + m[1, 1] * b[1] + m[1, 2] * b[2] + m[1, 3] * b[3],
+            m[2, 0] * b[0] + m[2, 1] * b[1] + m[2, 2] * b[2] + m[2, 3] * b[3],
+            m[3, 0] * b[0] + m[3, 1] * b[1] + m[3, 2] * b[2] + m[3, 3] * b[3])
+
+
+ZERO4 = (0.0, 0.0, 0.0, 0.0)
+IDENTITY4 = ((1.0, 0.0, 0.0, 0.0), (0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 1.0, 0.0),
+             (0.0, 0.0, 0.0, 1.0))
+ZERO44 = (ZERO4, ZERO4, ZERO4, ZERO4)
+
+
+@kernel
+def newton_step(jac, r):
+    """-jac^-1 r."""
+    x = dense_solve(jac, r, ZERO4)[0]
+    return -x[0], -x[1], -x[2], -x[3]
+
+
+@kernel
+def moved(x, step, dx):
+    """x + step dx."""
+    return x[0] + step * dx[0], x[1] + step * dx[1], x[2] + step * dx[2], x[3] + step * dx[3]
 
 
 # --- the local problem on one smooth surface ------------------------------------------------
+
 @kernel
-def local_residual(prm, lp, de_in, J_in, x, r, jac):
-    """The scaled residual r (4,) and Jacobian jac (4, 4) of the local problem (module doc)
-    at x = (xi, J, dgamma, h), for the inputs de_in, J_in."""
+def local_residual(prm, lp, de_in, J_in, x):
+    """(r, jac): the scaled residual (4,) and Jacobian (4 rows of 4) of the local problem
+    (module doc) at x = (xi, J, dgamma, h), for the inputs de_in, J_in."""
     G = prm[G_]
-    xi, J, dg, h = x[0], x[1], x[2], x[3]
+    xi, J, dg, h = x
     p, dp = pressure(prm, xi)
     f, f_p, f_J, f_h, f_pp, f_pJ, f_JJ, f_ph, f_Jh = smooth_surface(prm, p, J, h, lp[PC_N])
     dg_p = dg * f_p
     rh, rh_h, rh_c = hardening_law(prm, h, dg_p, lp[H_COMMITTED])
     c = bulk_compliance(prm, p)
     dg_pp, dg_pJ, dg_ph = dg * f_pp, dg * f_pJ, dg * f_ph
-    r[0] = bulk_strain(prm, p, lp[P_N]) - de_in + dg_p
-    r[1] = (J - J_in) / G + dg * f_J
-    r[2] = f
-    r[3] = rh
-    jac[0, 0], jac[0, 1], jac[0, 2], jac[0, 3] = (c + dg_pp) * dp, dg_pJ, f_p, dg_ph
-    jac[1, 0], jac[1, 1], jac[1, 2], jac[1, 3] = dg_pJ * dp, 1.0 / G + dg * f_JJ, f_J, dg * f_Jh
-    jac[2, 0], jac[2, 1], jac[2, 2], jac[2, 3] = f_p * dp, f_J, 0.0, f_h
-    jac[3, 0], jac[3, 1] = rh_c * dg * f_pp * dp, rh_c * dg * f_pJ
-    jac[3, 2], jac[3, 3] = rh_c * f_p, rh_h + rh_c * dg * f_ph
-    row = lp[STRAIN_ROW]
-    for i in range(4):
-        scale = row if i != 2 else 1.0 / lp[SCALE]
-        r[i] *= scale
-        for j in range(4):
-            jac[i, j] *= scale
+    row, f_row = lp[STRAIN_ROW], 1.0 / lp[SCALE]     # residuals as relative strains
+    r = (row * (bulk_strain(prm, p, lp[P_N]) - de_in + dg_p),
+         row * ((J - J_in) / G + dg * f_J),
+         f_row * f,
+         row * rh)
+    jac = ((row * ((c + dg_pp) * dp), row * dg_pJ, row * f_p, row * dg_ph),
+           (row * (dg_pJ * dp), row * (1.0 / G + dg * f_JJ), row * f_J, row * (dg * f_Jh)),
+           (f_row * (f_p * dp), f_row * f_J, 0.0, f_row * f_h),
+           (row * (rh_c * dg * f_pp * dp), row * (rh_c * dg * f_pJ), row * (rh_c * f_p),
+            row * (rh_h + rh_c * dg * f_ph)))
+    return r, jac
 
 
 @kernel
@@ -352,62 +374,55 @@ def merit(r):
 def all_finite(jac):
     for i in range(4):
         for j in range(4):
-            if not np.isfinite(jac[i, j]):
+            if not np.isfinite(jac[i][j]):
                 return False
     return True
 
 
 @kernel
-def line_search(prm, lp, de_in, J_in, x, r, halvings, ws):
-    """The Newton step (ws[STEP]) from x (residual r there), halved until the merit
-    |r|^2 / 2 decreases (Armijo) at an admissible point: the iterate, its residual and
-    Jacobian in ws[X_TRY], ws[RES_TRY], ws[JAC_TRY]. Returns whether it moved."""
-    x_try, r_try, jac_try, dx = ws[X_TRY, :4], ws[RES_TRY, :4], ws[JAC_TRY:JAC_TRY + 4, :4], ws[STEP, :4]
+def line_search(prm, lp, de_in, J_in, x, dx, r, halvings):
+    """The Newton step dx from x (residual r there), halved until the merit |r|^2 / 2
+    decreases (Armijo) at an admissible point. Returns (moved, x, r, jac) there."""
     m0 = merit(r)
     step = 1.0
     for _ in range(halvings):
-        for i in range(4):
-            x_try[i] = x[i] + step * dx[i]
-        local_residual(prm, lp, de_in, J_in, x_try, r_try, jac_try)
+        x_try = moved(x, step, dx)
+        r_try, jac_try = local_residual(prm, lp, de_in, J_in, x_try)
         m = merit(r_try)
         if (local_admissible(prm, x_try) and np.isfinite(m) and all_finite(jac_try)
                 and m <= (1.0 - 1e-4 * step) * m0):
-            return True
+            return True, x_try, r_try, jac_try
         step *= 0.5
-    return False
+    return False, x, r, ZERO44
 
 
 @kernel
-def local_newton(prm, lp, de_in, J_in, x, jac, settings, ws):
-    """Line-searched Newton from x (4,), in place; jac the Jacobian at the result.
-    A converged point gets one more full step (to rounding accuracy) where that does not
-    increase the residual. Returns whether it converged (jac zero otherwise)."""
-    r, x_try, r_try = ws[RES, :4], ws[X_TRY, :4], ws[RES_TRY, :4]
-    jac_try, dx = ws[JAC_TRY:JAC_TRY + 4, :4], ws[STEP, :4]
-    local_residual(prm, lp, de_in, J_in, x, r, jac)
+def local_newton(prm, lp, de_in, J_in, x, settings):
+    """Line-searched Newton from x. A converged point gets one more full step (to
+    rounding accuracy) where that does not increase the residual. Returns (x, the
+    Jacobian there (zero if not converged), converged)."""
+    r, jac = local_residual(prm, lp, de_in, J_in, x)
     converged = False
     for _ in range(settings[0]):
         norm = max_abs(r)
         if norm <= NEWTON_TOL:
             converged = True
             break
-        newton_step(jac, r, dx, ws)
-        if not line_search(prm, lp, de_in, J_in, x, r, settings[1], ws):
+        ok, x_try, r_try, jac_try = line_search(prm, lp, de_in, J_in, x, newton_step(jac, r),
+                                                r, settings[1])
+        if not ok:
             converged = norm <= STALL_TOL     # stalled at the rounding floor
             break
-        x[:], r[:], jac[:] = x_try, r_try, jac_try
+        x, r, jac = x_try, r_try, jac_try
     if not converged:
-        jac[:] = 0.0
-        return False
+        return x, ZERO44, False
     # Polish with one more full step.
-    newton_step(jac, r, dx, ws)
-    for i in range(4):
-        x_try[i] = x[i] + dx[i]
-    local_residual(prm, lp, de_in, J_in, x_try, r_try, jac_try)
+    x_try = moved(x, 1.0, newton_step(jac, r))
+    r_try, jac_try = local_residual(prm, lp, de_in, J_in, x_try)
     norm_t = max_abs(r_try)
     if local_admissible(prm, x_try) and np.isfinite(norm_t) and norm_t <= max_abs(r):
-        x[:], jac[:] = x_try, jac_try
-    return True
+        return x_try, jac_try, True
+    return x, jac, True
 
 
 @kernel
@@ -435,13 +450,13 @@ def f_path(prm, lp, s_n, s_tr, t):
 
 
 @kernel
-def continuation(prm, lp, s_n, s_tr, x, jac, settings, ws):
+def continuation(prm, lp, s_n, s_tr, settings):
     """Solve the one-step problem by continuation in the fraction t of the strain
     increment: from the elastic fraction t_e (where the trial path meets the surface and
     the solution is the trial state with dgamma = 0) to t = 1 in N equal parts, each
     Newton solve starting from the last; N grows over the settings' parts while it fails.
     The answer is the one-step backward-Euler solution itself (the intermediate problems
-    only lead Newton to it), so the tangent is unchanged. Returns whether it converged."""
+    only lead Newton to it), so the tangent is unchanged. Returns (x, jac, converged)."""
     # Elastic fraction by bisection (t_e = 0 if the step starts outside the surface).
     lo, hi = 0.0, 1.0
     inside = f_path(prm, lp, s_n, s_tr, lo) <= 0.0
@@ -452,53 +467,46 @@ def continuation(prm, lp, s_n, s_tr, x, jac, settings, ws):
         else:
             lo = mid
     t_e = lo if inside else 0.0
+    x = ZERO4
     for parts in settings[2:]:
         _, J0, xi0 = trial_path(prm, lp, s_n, s_tr, t_e)
-        x[0], x[1], x[2], x[3] = xi0, J0, 0.0, lp[H_N]
+        x = (xi0, J0, 0.0, lp[H_N])
         for k in range(1, parts + 1):
             t = t_e + (1.0 - t_e) * k / parts
             de_in, J_in, _ = trial_path(prm, lp, s_n, s_tr, t)
-            if not local_newton(prm, lp, de_in, J_in, x, jac, settings, ws):
+            x, jac, ok = local_newton(prm, lp, de_in, J_in, x, settings)
+            if not ok:
                 break
             if k == parts:
-                return True
-    jac[:] = 0.0
-    return False
+                return x, jac, True
+    return x, ZERO44, False
 
 
 @kernel
-def smooth_return(prm, lp, settings, ws):
+def smooth_return(prm, lp, s_n, s_tr, x0, fallback, settings):
     """Backward-Euler return onto the model's smooth hardening surface (the local problem
-    of the module doc) from x = (xi, J, dgamma, h) in ws[X_ROW]: a Newton solve, again
-    from ws[FALLBACK] where it fails (x then a warm start from a nearby solution, the
-    fallback the trial state; NaN in its first entry: none), then by
-    :func:`continuation`; a root with dgamma < 0 or J < 0 is no solution. The trial split
-    is in ws[S_N], ws[S_TR]. Returns (p, J, dgamma, h, (p_e, p_J, J_e, J_J), converged)."""
+    of the module doc) from x0 = (xi, J, dgamma, h): a Newton solve, again from
+    ``fallback`` where it fails (x0 then a warm start from a nearby solution, the fallback
+    the trial state; NaN in its first entry: none), then by :func:`continuation`; a root
+    with dgamma < 0 or J < 0 is no solution. Returns (p, J, dgamma, h, (p_e, p_J, J_e,
+    J_J), converged)."""
     G = prm[G_]
-    x, fallback, jac = ws[X_ROW, :4], ws[FALLBACK, :4], ws[JAC:JAC + 4, :4]
-    converged = (local_newton(prm, lp, lp[DE_V], lp[J_TR], x, jac, settings, ws)
-                 and is_solution(prm, lp, x))
+    x, jac, converged = local_newton(prm, lp, lp[DE_V], lp[J_TR], x0, settings)
+    converged = converged and is_solution(prm, lp, x)
     if not converged and not math.isnan(fallback[0]):
-        x[:] = fallback
-        converged = (local_newton(prm, lp, lp[DE_V], lp[J_TR], x, jac, settings, ws)
-                     and is_solution(prm, lp, x))
+        x, jac, converged = local_newton(prm, lp, lp[DE_V], lp[J_TR], fallback, settings)
+        converged = converged and is_solution(prm, lp, x)
     if not converged:
-        converged = (continuation(prm, lp, ws[S_N], ws[S_TR], x, jac, settings, ws)
-                     and is_solution(prm, lp, x))
+        x, jac, converged = continuation(prm, lp, s_n, s_tr, settings)
+        converged = converged and is_solution(prm, lp, x)
     # Iterates may cross J = 0 or dgamma = 0; a solution may not, beyond rounding.
     J, dgamma = max(x[1], 0.0), max(x[2], 0.0)
     p, dp = pressure(prm, x[0])
     # Implicit-function theorem: the inputs de_v, J_tr enter r_p as -de_v and r_J as -J_tr / G.
-    rhs, dx = ws[RHS:RHS + 4, 0:2], ws[RHS:RHS + 4, 2:4]
-    rhs[:] = 0.0
-    rhs[0, 0] = lp[STRAIN_ROW]
-    rhs[1, 1] = lp[STRAIN_ROW] / G
-    if not converged:
-        jac[:] = 0.0
-        for i in range(4):
-            jac[i, i] = 1.0
-    dense_solve(jac, rhs, 2, dx, ws[AUG:AUG + 4])
-    return p, J, dgamma, x[3], (dp * dx[0, 0], dp * dx[0, 1], dx[1, 0], dx[1, 1]), converged
+    row = lp[STRAIN_ROW]
+    d_e, d_J = dense_solve(jac if converged else IDENTITY4, (row, 0.0, 0.0, 0.0),
+                           (0.0, row / G, 0.0, 0.0))
+    return p, J, dgamma, x[3], (dp * d_e[0], dp * d_J[0], d_e[1], d_J[1]), converged
 
 
 @kernel

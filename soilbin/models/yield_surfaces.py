@@ -4,8 +4,8 @@ the cap ellipse of the cap models (eq. B.10) with their failure function
 (B.6) with the critical-state hardening (B.8). Compression positive, in
 (p, J) with the hardening variable h (see :mod:`.invariant_return`).
 
-A model is a parameter vector ``prm`` (float64): the slots every invariant
-model has (shear modulus, volumetric law, pressure variable, which surface),
+A model is a parameter vector ``prm`` (:data:`PRM_SLOTS` floats): the slots every
+invariant model has (shear modulus, volumetric law, pressure variable, which surface),
 then its own. :func:`smooth_surface`, :func:`hardening_law` and
 :func:`surface_admissible` pick the surface by ``prm[SURFACE]``, so the one
 compiled local Newton of :mod:`.invariant_return` serves every model.
@@ -30,12 +30,13 @@ CAP_SURFACE, MODIFIED_CAM_CLAY, CAM_CLAY = 0.0, 1.0, 2.0
 #: volumetric hardening.
 (CAP_A, CAP_B, CAP_C, CAP_BETA, CAP_R, CAP_W, CAP_D, L_MIN, P_LO, J_LO, DF_LO, X_MIN, F_MIN,
  ETA_D, VOLUMETRIC) = range(7, 22)
-CAP_SLOTS = 22
 
 # --- the critical-state models' own slots ------------------------------------------------
 #: M of the critical state line q = M p; theta = (1 + e0) / (lam - kappa) of B.8.
 CS_M, CS_THETA = range(7, 9)
-CS_SLOTS = 9
+
+#: The length of every invariant model's parameter vector.
+PRM_SLOTS = 22
 
 
 @kernel
