@@ -4,6 +4,7 @@
 VENV    := .venv
 PY      := $(VENV)/bin/python
 STAMP   := $(VENV)/.soilbin-installed
+KERNELS := $(VENV)/.kernels-compiled
 SCENE   ?= scenes/tine-2in-108lb.toml
 export OMP_NUM_THREADS := 1
 
@@ -32,7 +33,7 @@ bench: setup
 bench-quick: setup
 	$(PY) scripts/benchmark.py --quick
 
-setup: system $(STAMP)
+setup: system $(STAMP) $(KERNELS)
 
 system:
 	@sh scripts/install-system.sh
@@ -48,6 +49,11 @@ $(STAMP): pyproject.toml
 	/usr/bin/python3 -c "import numpy; print('numpy==' + numpy.__version__)" > $(VENV)/constraints.txt
 	echo "markdown-it-py>=2.2,<3" >> $(VENV)/constraints.txt
 	$(PY) -m pip install --quiet --no-build-isolation -c $(VENV)/constraints.txt -e ".[test]"
+	touch $@
+
+# the constitutive kernels, compiled by numba into its disk cache once (not at a run's start)
+$(KERNELS): $(STAMP) $(wildcard soilbin/models/*.py)
+	$(PY) -m soilbin.models
 	touch $@
 
 clean:
