@@ -138,9 +138,9 @@ from .invariant_return import (YIELD_TOL, bracketed_root, bulk_compliance, bulk_
                                point_invariants, smooth_return, solved_ratio, strain_row,
                                trial_split)
 from .jit import kernel
-from .yield_surfaces import (CAP_A, CAP_B, CAP_BETA, CAP_C, CAP_D, CAP_R, PRM_SLOTS,
-                             CAP_SURFACE, CAP_W, DF_LO, ETA_D, EXPONENTIAL, F_MIN, G_, J_LO, K_,
-                             L_MIN, LOG_SHIFT, P_LO, SURFACE, VOLUMETRIC, X_MIN, cap_compaction,
+from .yield_surfaces import (CAP_A, CAP_B, CAP_BETA, CAP_C, CAP_D, CAP_R, CAP_SURFACE, CAP_W,
+                             DF_LO, ETA_D, EXPONENTIAL, F_MIN, G_, J_LO, K_, L_MIN, LOG_SHIFT,
+                             P_LO, PRM_SLOTS, SURFACE, VOLUMETRIC, X_MIN, cap_compaction,
                              cap_failure, smooth_surface)
 
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.

@@ -79,8 +79,8 @@ from .invariant_return import (YIELD_TOL, bracketed_root, bulk_compliance, bulk_
                                local_settings, pressure_variable, smooth_return, solved_ratio,
                                strain_row, trial_split)
 from .jit import kernel
-from .yield_surfaces import (CAM_CLAY, CS_M, PRM_SLOTS, CS_THETA, EXPONENTIAL, G_, K_,
-                             KAPPA_STAR, LOG_SHIFT, MODIFIED_CAM_CLAY, P_MIN, SURFACE,
+from .yield_surfaces import (CAM_CLAY, CS_M, CS_THETA, EXPONENTIAL, G_, K_, KAPPA_STAR,
+                             LOG_SHIFT, MODIFIED_CAM_CLAY, P_MIN, PRM_SLOTS, SURFACE,
                              cam_clay_value, modified_cam_clay_value)
 
 SQRT3 = math.sqrt(3.0)

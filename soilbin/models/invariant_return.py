@@ -61,9 +61,9 @@ the caps, the Cam-Clay reduction) use a bracketed Newton-bisection
 model raises :class:`ReturnMapError` naming itself and the number of failing
 points (:func:`check_converged`), and the step driver cuts the step.
 
-The per-point local problem travels as a tuple ``lp`` (:data:`LP_FIELDS`); the
-local solver's limits as the integer array :func:`local_settings`, read when a
-model is called (so that a test may shorten them).
+The per-point local problem travels as a tuple ``lp`` (its slots :data:`P_N` ..
+:data:`STRAIN_ROW`); the local solver's limits as the integer array
+:func:`local_settings`, read when a model is called (so that a test may shorten them).
 """
 import math
 
@@ -71,7 +71,6 @@ import numpy as np
 
 from ..errors import ReturnMapError
 from ..tensors import P_DEV, SQRT2
-from .base import stress_invariants
 from .jit import kernel
 from .yield_surfaces import (EXPONENTIAL, G_, K_, KAPPA_STAR, LOG_SHIFT, P_MIN, hardening_law,
                              smooth_surface, surface_admissible)
@@ -87,10 +86,10 @@ STALL_TOL = 1e-10
 #: Continuation: numbers of equal parts of the plastic part of the step tried in turn.
 CONTINUATION_PARTS = (4, 16, 64, 256)
 
-#: The local problem of one point: the step's start p_n, its volumetric strain de_v and
-#: trial J_tr, the committed hardening variable h_n, the stress scale, the surface's and
-#: the hardening law's per-point constants (p_c,n; H_n), the strain residuals' scale.
-LP_FIELDS = ("p_n", "de_v", "J_tr", "h_n", "scale", "pc_n", "H_n", "strain_row")
+#: Slots of the local problem ``lp`` of one point: the step's start p_n, its volumetric
+#: strain de_v and trial J_tr, the committed hardening variable h_n, the stress scale, the
+#: surface's and the hardening law's per-point constants (p_c,n; H_n), the strain
+#: residuals' scale.
 P_N, DE_V, J_TR, H_N, SCALE, PC_N, H_COMMITTED, STRAIN_ROW = range(8)
 
 
@@ -169,21 +168,27 @@ def trial_split(prm, deps, stress_n, s_n, s_tr, n):
     return -p, -(deps[0] + deps[1] + deps[2]), norm / SQRT2
 
 
-def invariants(stress):
-    """(p, J) of (n, 6) stresses, compression-positive p (J as sqrt(s:s / 2), the
-    initial states' numbers)."""
-    p, s, _ = stress_invariants(stress)
-    return -p, np.sqrt(0.5 * np.sum(s * s, axis=-1))
-
-
 @kernel
 def point_invariants(stress):
-    """(p, J) of one Mandel stress, as :func:`invariants`."""
+    """(p, J) of one Mandel stress, compression-positive p, J = sqrt(s:s / 2)."""
     p = (stress[0] + stress[1] + stress[2]) / 3.0
     ss = 0.0
     for k in range(6):
         ss += (stress[k] - p) ** 2 if k < 3 else stress[k] ** 2
     return -p, math.sqrt(0.5 * ss)
+
+
+@kernel
+def invariants_into(stress, p, J):
+    for i in range(stress.shape[0]):
+        p[i], J[i] = point_invariants(stress[i])
+
+
+def invariants(stress):
+    """(p, J) of (n, 6) stresses (:func:`point_invariants`): the initial states' numbers."""
+    p, J = np.empty(len(stress)), np.empty(len(stress))
+    invariants_into(np.ascontiguousarray(stress, dtype=float), p, J)
+    return p, J
 
 
 @kernel
