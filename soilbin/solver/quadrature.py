@@ -75,15 +75,30 @@ class MaterialPoints:
                               len(idx), None if stress0 is None else stress0[idx])
                           for name, idx in self.index.items()}
         self.trial = dict(self.committed)
-        self._stress = np.zeros((n_points, 6))
-        self._tangent = np.zeros((n_points, 6, 6))
+        # Stress and tangent in evaluation order: views of the Functions' values where their
+        # dof order is the evaluation order (no copy to write), else arrays copied over.
+        self._in_order = np.array_equal(self._slot, np.arange(n_points))
+        self._stress = self._values(self.stress, (6,))
+        self._tangent = self._values(self.tangent, (6, 6))
         self._tangent_frozen = False
         self._converged_tangent = None
         self.update()   # zero increment: the initial stress and the elastic tangent
         self._converged_tangent = self._tangent.copy()
 
+    def _values(self, function, shape):
+        """The per-point values (n_points, *shape) of a quadrature Function in evaluation
+        order: a view of its array if that is its order, else a zero array of that shape."""
+        n_points = len(self._slot)
+        if self._in_order:
+            function.x.array[:] = 0.0
+            return function.x.array.reshape((n_points,) + shape)
+        return np.zeros((n_points,) + shape)
+
     def write(self, values, function):
-        """Copy per-point values (n_points, ...), in evaluation order, into a quadrature Function."""
+        """Copy per-point values (n_points, ...), in evaluation order, into a quadrature Function
+        (nothing to do for the views of :meth:`_values`)."""
+        if np.may_share_memory(values, function.x.array):
+            return
         block = values.reshape(len(values), -1)
         function.x.array.reshape(len(values), -1)[self._slot] = block
 
