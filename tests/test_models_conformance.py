@@ -14,7 +14,7 @@ import pytest
 
 from conftest import central_differences
 
-from soilbin.errors import InputError
+from soilbin.errors import InputError, ReturnMapError
 from soilbin.models import MODELS
 from soilbin.params import from_table
 
@@ -90,3 +90,12 @@ def test_invalid_parameters_name_the_key(name, key, value):
     table = MODELS[name].conformance_samples()[0].table
     with pytest.raises(InputError, match=rf"materials\.soil\.{key}\b"):
         from_table(MODELS[name], {**table, key: value}, "materials.soil")
+
+
+def test_a_non_finite_result_names_the_points():
+    model = from_table(MODELS["elastic"], {"E": 1.0e5, "nu": 0.3}, "materials.soil")
+    deps = np.zeros((3, 6))
+    deps[1, 2] = math.inf
+    with pytest.raises(ReturnMapError, match=r"LinearElastic: local stress update failed "
+                                             r"\(non-finite result\) at 1 of 3 points"):
+        model.update(deps, model.initial_state(3))

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import ReturnMapError
 from ..params import Params
 from ..tensors import deviator, trace
+from .jit import kernel
 
 State = dict[str, np.ndarray]
 
@@ -35,6 +36,20 @@ SHEAR = np.array([-0.09063425125224764, 0.19020462782182082, -0.0995703765695731
 #: of critical (compacting); at the corner of cap and failure surface; at the
 #: vertex of Cam-Clay on the mean-stress axis (p = p_c, q = 0).
 ELASTIC, FAILURE, APEX, CUTOFF, CAP, CAP_CORNER, TIP = 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0
+
+
+@kernel
+def count_nonfinite(sigma, tangent):
+    """The number of points whose stress (n, 6) or tangent (n, 36) has a non-finite entry."""
+    failed = 0
+    for i in range(sigma.shape[0]):
+        total = 0.0    # inf or nan if any entry is
+        for k in range(6):
+            total += 0.0 * sigma[i, k]
+        for k in range(36):
+            total += 0.0 * tangent[i, k]
+        failed += 0 if total == 0.0 else 1
+    return failed
 
 
 def stress_invariants(stress):
@@ -95,11 +110,10 @@ class Model(Params, abc.ABC):
         """
         with np.errstate(all="ignore"):   # a non-finite result is reported below
             sigma, tangent, new_state = self.integrate(np.asarray(deps, dtype=float), state, guess)
-        ok = np.isfinite(sigma).all(axis=-1) & np.isfinite(tangent).all(axis=(-2, -1))
-        failed = np.count_nonzero(~ok)
+        failed = count_nonfinite(sigma, tangent.reshape(len(tangent), 36))
         if failed:
             raise ReturnMapError(f"{type(self).__name__}: local stress update failed "
-                                 f"(non-finite result) at {failed} of {len(ok)} points")
+                                 f"(non-finite result) at {failed} of {len(sigma)} points")
         return sigma, tangent, new_state
 
     @classmethod
