@@ -246,15 +246,6 @@ def finish(prm, p, ratio, sens, plastic, s_tr, n, p_n, de_v, J_tr, sigma, C):
 # reference counting of a view at every call.
 
 @kernel
-def swapped(rows, a, b):
-    """The rows with rows a and b exchanged."""
-    return (rows[b] if a == 0 else rows[a] if b == 0 else rows[0],
-            rows[b] if a == 1 else rows[a] if b == 1 else rows[1],
-            rows[b] if a == 2 else rows[a] if b == 2 else rows[2],
-            rows[b] if a == 3 else rows[a] if b == 3 else rows[3])
-
-
-@kernel
 def row_less(row, factor, pivot):
     """row - factor pivot, rows of 6."""
     return (row[0] - factor * pivot[0], row[1] - factor * pivot[1], row[2] - factor * pivot[2],
@@ -262,34 +253,50 @@ def row_less(row, factor, pivot):
 
 
 @kernel
-def back_substitute(a, col):
-    """x of the upper-triangular rows a (4 x 6) with the right-hand side in column col."""
-    x3 = a[3][col] / a[3][3]
-    x2 = (a[2][col] - a[2][3] * x3) / a[2][2]
-    x1 = (a[1][col] - a[1][2] * x2 - a[1][3] * x3) / a[1][1]
-    x0 = (a[0][col] - a[0][1] * x1 - a[0][2] * x2 - a[0][3] * x3) / a[0][0]
+def back_substitute(a0, a1, a2, a3, b):
+    """x of the upper-triangular rows a0 .. a3 and the right-hand side b."""
+    x3 = b[3] / a3[3]
+    x2 = (b[2] - a2[3] * x3) / a2[2]
+    x1 = (b[1] - a1[2] * x2 - a1[3] * x3) / a1[1]
+    x0 = (b[0] - a0[1] * x1 - a0[2] * x2 - a0[3] * x3) / a0[0]
     return x0, x1, x2, x3
 
 
 @kernel
 def dense_solve(jac, b0, b1):
     """(x0, x1) with jac x0 = b0 and jac x1 = b1 (jac: 4 rows of 4): Gaussian elimination
-    with partial pivoting; the pseudo-inverse if a pivot is zero."""
-    a = ((jac[0][0], jac[0][1], jac[0][2], jac[0][3], b0[0], b1[0]),
-         (jac[1][0], jac[1][1], jac[1][2], jac[1][3], b0[1], b1[1]),
-         (jac[2][0], jac[2][1], jac[2][2], jac[2][3], b0[2], b1[2]),
-         (jac[3][0], jac[3][1], jac[3][2], jac[3][3], b0[3], b1[3]))
-    for c in range(4):
-        for r in range(c + 1, 4):      # the largest |a[:, c]| of rows c.. to row c
-            if abs(a[r][c]) > abs(a[c][c]):
-                a = swapped(a, c, r)
-        if a[c][c] == 0.0:
-            return pinv_solve(jac, b0, b1)
-        a = (a[0] if c >= 0 else row_less(a[0], a[0][c] / a[c][c], a[c]),
-             a[1] if c >= 1 else row_less(a[1], a[1][c] / a[c][c], a[c]),
-             a[2] if c >= 2 else row_less(a[2], a[2][c] / a[c][c], a[c]),
-             a[3] if c >= 3 else row_less(a[3], a[3][c] / a[c][c], a[c]))
-    return back_substitute(a, 4), back_substitute(a, 5)
+    with partial pivoting (column by column, the largest entry of the rows below swapped
+    up), on rows [jac | b0 | b1]; the pseudo-inverse if a pivot is zero."""
+    a0 = (jac[0][0], jac[0][1], jac[0][2], jac[0][3], b0[0], b1[0])
+    a1 = (jac[1][0], jac[1][1], jac[1][2], jac[1][3], b0[1], b1[1])
+    a2 = (jac[2][0], jac[2][1], jac[2][2], jac[2][3], b0[2], b1[2])
+    a3 = (jac[3][0], jac[3][1], jac[3][2], jac[3][3], b0[3], b1[3])
+    if abs(a1[0]) > abs(a0[0]):
+        a0, a1 = a1, a0
+    if abs(a2[0]) > abs(a0[0]):
+        a0, a2 = a2, a0
+    if abs(a3[0]) > abs(a0[0]):
+        a0, a3 = a3, a0
+    if a0[0] == 0.0:
+        return pinv_solve(jac, b0, b1)
+    a1, a2, a3 = (row_less(a1, a1[0] / a0[0], a0), row_less(a2, a2[0] / a0[0], a0),
+                  row_less(a3, a3[0] / a0[0], a0))
+    if abs(a2[1]) > abs(a1[1]):
+        a1, a2 = a2, a1
+    if abs(a3[1]) > abs(a1[1]):
+        a1, a3 = a3, a1
+    if a1[1] == 0.0:
+        return pinv_solve(jac, b0, b1)
+    a2, a3 = row_less(a2, a2[1] / a1[1], a1), row_less(a3, a3[1] / a1[1], a1)
+    if abs(a3[2]) > abs(a2[2]):
+        a2, a3 = a3, a2
+    if a2[2] == 0.0:
+        return pinv_solve(jac, b0, b1)
+    a3 = row_less(a3, a3[2] / a2[2], a2)
+    if a3[3] == 0.0:
+        return pinv_solve(jac, b0, b1)
+    return (back_substitute(a0, a1, a2, a3, (a0[4], a1[4], a2[4], a3[4])),
+            back_substitute(a0, a1, a2, a3, (a0[5], a1[5], a2[5], a3[5])))
 
 
 @kernel
