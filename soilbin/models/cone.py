@@ -43,6 +43,11 @@ for eta = 0), and then the return has three plastic regions in the trial
 
 The corner replaces the apex; with T >= k / eta the cut-off is inactive and
 the return is exactly that of the plain cone.
+
+Compiled per point (:mod:`.jit`): :func:`return_map` is the return of one
+point from its trial stress, :func:`cone_update` the loop over the points
+that :meth:`ConeModel.integrate` calls once, on the elastic predictor of
+:meth:`.elastic.IsotropicElasticity.trial` (elastic points return it exactly).
 """
 import abc
 import dataclasses
@@ -51,9 +56,10 @@ import math
 import numpy as np
 
 from ..params import param
-from ..tensors import IDENTITY, P_DEV, SQRT2
-from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample, stress_invariants
-from .elastic import IsotropicElasticity, elastic_stiffness
+from ..tensors import IDENTITY, P_DEV, P_VOL, SQRT2
+from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
+from .elastic import IsotropicElasticity
+from .jit import kernel
 
 #: Trial states with f_tr below this fraction of the stress scale are elastic.
 YIELD_TOL = 1e-12
@@ -66,77 +72,57 @@ def tension_cutoff_param():
                      "inf (the default) or at least the cone's apex: no cut-off")
 
 
+@kernel
 def cutoff_active(eta, k, tension_cutoff):
     """True when the cut-off p <= T cuts the cone (T below the apex k / eta)."""
     return math.isfinite(tension_cutoff) and eta * tension_cutoff < k
 
 
-def return_map(sigma_tr, K, G, eta, k, tension_cutoff=math.inf, eta_g=None):
-    """(sigma, C_tan, yield_state) from trial stresses (n, 6) for the cone
-    (eta, k) with the flow potential's slope ``eta_g`` (default eta: associated),
-    optionally cut off at the mean stress p = ``tension_cutoff``."""
-    eta_g = eta if eta_g is None else eta_g
-    p_tr, s_tr, s_norm = stress_invariants(sigma_tr)
-    J_tr = s_norm / SQRT2
-    f_tr = J_tr + eta * p_tr - k
-    plastic = f_tr > YIELD_TOL * (k + J_tr + eta * np.abs(p_tr))
-    if cutoff_active(eta, k, tension_cutoff):
-        return _cutoff_return_map(sigma_tr, p_tr, s_tr, s_norm, J_tr, f_tr, plastic,
-                                  K, G, eta, k, tension_cutoff, eta_g)
-    dgamma = np.where(plastic, f_tr, 0.0) / (G + K * eta * eta_g)
-    # The apex: the trial beyond the corner normal cone (module doc); for
-    # eta_g > 0 the same as sqrt(J2) = J_tr - G dgamma < 0 on the cone.
-    if eta > 0.0:
-        apex = plastic & (G * (p_tr - k / eta) > K * eta_g * J_tr)
-    else:
-        apex = np.zeros_like(plastic)
-    cone = plastic & ~apex
+# --- one point ------------------------------------------------------------------------------
+#
+# ``prm`` is the model's (K, G, eta, k, T, eta_g) (:attr:`ConeModel.prm`); a point's trial
+# stress travels as (p_tr, J_tr = sqrt(J2_tr)), its deviator s and the direction n of s.
 
-    sigma = sigma_tr.copy()
-    sigma[cone] = (s_tr[cone] * (1.0 - G * dgamma[cone] / J_tr[cone])[:, None]
-                   + np.outer(p_tr[cone] - K * eta_g * dgamma[cone], IDENTITY))
-    if apex.any():   # only when eta > 0
-        sigma[apex] = (k / eta) * IDENTITY
-
-    tangent = np.repeat(elastic_stiffness(K, G)[None], len(sigma), axis=0)
-    tangent[cone] = consistent_tangent(s_tr[cone] / s_norm[cone, None],
-                                       G * dgamma[cone] / J_tr[cone], K, G, eta, eta_g)
-    tangent[apex] = 0.0   # perfect plasticity: the apex stress k/eta is fixed
-
-    yield_state = np.where(apex, APEX, np.where(cone, FAILURE, ELASTIC))
-    return sigma, tangent, yield_state
+@kernel
+def trial_invariants(sigma_tr, s, n):
+    """(p_tr, J_tr) of the trial stress sigma_tr = sigma_n + C_e : deps; its deviator
+    into s and the direction n = s / ``|s|`` (zero where s = 0) into n."""
+    p = (sigma_tr[0] + sigma_tr[1] + sigma_tr[2]) / 3.0
+    ss = 0.0
+    for i in range(6):
+        s[i] = sigma_tr[i] - p if i < 3 else sigma_tr[i]
+        ss += s[i] * s[i]
+    norm = math.sqrt(ss)
+    for i in range(6):
+        n[i] = s[i] / norm if norm > 0.0 else 0.0
+    return p, norm / SQRT2
 
 
-def _cutoff_return_map(sigma_tr, p_tr, s_tr, s_norm, J_tr, f_tr, plastic, K, G, eta, k, T,
-                       eta_g):
-    """:func:`return_map` with an active cut-off p <= T (regions: module doc)."""
-    plastic = plastic | (p_tr - T > YIELD_TOL * (k + J_tr + np.abs(p_tr)))
-    J_c = k - eta * T   # sqrt(J2) at the corner, > 0
-    corner = plastic & (J_tr > J_c) & (G * (p_tr - T) >= eta_g * K * (J_tr - J_c))
-    cut = plastic & ~corner & (J_tr <= J_c)
-    cone = plastic & ~corner & ~cut   # here f_tr > 0 and the cone return has p < T
-    dgamma = np.where(cone, f_tr, 0.0) / (G + K * eta * eta_g)
-
-    sigma = sigma_tr.copy()
-    sigma[cone] = (s_tr[cone] * (1.0 - G * dgamma[cone] / J_tr[cone])[:, None]
-                   + np.outer(p_tr[cone] - K * eta_g * dgamma[cone], IDENTITY))
-    sigma[corner] = s_tr[corner] * (J_c / J_tr[corner])[:, None] + T * IDENTITY
-    sigma[cut] = s_tr[cut] + T * IDENTITY
-
-    tangent = np.repeat(elastic_stiffness(K, G)[None], len(sigma), axis=0)
-    tangent[cone] = consistent_tangent(s_tr[cone] / s_norm[cone, None],
-                                       G * dgamma[cone] / J_tr[cone], K, G, eta, eta_g)
-    # Corner: p = T and sqrt(J2) = J_c are fixed, only the direction n of s turns.
-    n = s_tr[corner] / s_norm[corner, None]
-    tangent[corner] = (2.0 * G * (J_c / J_tr[corner])[:, None, None]
-                       * (P_DEV - n[:, :, None] * n[:, None, :]))
-    tangent[cut] = 2.0 * G * P_DEV   # p = T is fixed, s = s_tr
-
-    yield_state = np.select([cone, corner, cut], [FAILURE, APEX, CUTOFF], ELASTIC)
-    return sigma, tangent, yield_state
+@kernel
+def stress_from(s, ratio, p, sigma):
+    """sigma = ratio s + p I."""
+    for i in range(6):
+        sigma[i] = s[i] * ratio + (p if i < 3 else 0.0)
 
 
-def consistent_tangent(n, ratio, K, G, eta, eta_g=None):
+@kernel
+def elastic_tangent(K, G, C):
+    """C = C_e = 3K P_vol + 2G P_dev."""
+    for i in range(6):
+        for j in range(6):
+            C[i, j] = 3.0 * K * P_VOL[i, j] + 2.0 * G * P_DEV[i, j]
+
+
+@kernel
+def add_turn(factor, n, C):
+    """C += factor (P_dev - n x n): the deviator's turn with its direction n."""
+    for i in range(6):
+        for j in range(6):
+            C[i, j] += factor * (P_DEV[i, j] - n[i] * n[j])
+
+
+@kernel
+def consistent_tangent(K, G, eta, eta_g, n, ratio, C):
     """Algorithmic tangent on the cone (de Souza Neto et al. 2008, sec. 8.3,
     box 8.8 for non-associated flow):
 
@@ -144,16 +130,105 @@ def consistent_tangent(n, ratio, K, G, eta, eta_g=None):
         b_g = sqrt2 G n + eta_g K I  (the plastic correction's direction),
         b_f = sqrt2 G n + eta K I    (d f_tr / d eps),
 
-    with n = ``s_tr / |s_tr|`` (m, 6) and ratio = G dgamma / sqrt(J2_tr) (m,);
+    with n = ``s_tr / |s_tr|`` (6,) and ratio = G dgamma / sqrt(J2_tr), into C;
     unsymmetric unless eta_g = eta.
     """
-    eta_g = eta if eta_g is None else eta_g
-    b_f = SQRT2 * G * n + eta * K * IDENTITY
-    b_g = SQRT2 * G * n + eta_g * K * IDENTITY
-    nn = n[:, :, None] * n[:, None, :]
-    return (elastic_stiffness(K, G)
-            - 2.0 * G * ratio[:, None, None] * (P_DEV - nn)
-            - b_g[:, :, None] * b_f[:, None, :] / (G + K * eta * eta_g))
+    elastic_tangent(K, G, C)
+    add_turn(-(2.0 * G * ratio), n, C)
+    d = G + K * eta * eta_g
+    for i in range(6):
+        b_g = SQRT2 * G * n[i] + (eta_g * K if i < 3 else 0.0)
+        for j in range(6):
+            b_f = SQRT2 * G * n[j] + (eta * K if j < 3 else 0.0)
+            C[i, j] -= b_g * b_f / d
+
+
+@kernel
+def cone_return(prm, p_tr, J_tr, f_tr, s, n, sigma, C):
+    """The return onto the cone along the potential g (de Souza Neto et al. 2008,
+    box 8.8): dgamma = f_tr / (G + K eta eta_g), s = s_tr (1 - G dgamma / J_tr),
+    p = p_tr - K eta_g dgamma; writes sigma and the :func:`consistent_tangent` C."""
+    K, G, eta, k, T, eta_g = prm
+    dgamma = f_tr / (G + K * eta * eta_g)
+    ratio = G * dgamma / J_tr
+    stress_from(s, 1.0 - ratio, p_tr - K * eta_g * dgamma, sigma)
+    consistent_tangent(K, G, eta, eta_g, n, ratio, C)
+
+
+@kernel
+def return_map(prm, p_tr, J_tr, s, n, sigma, C):
+    """The return of one point from its trial stress (sigma holds it, elastic points keep
+    it) for the cone (eta, k) with the flow potential's slope eta_g, optionally cut off
+    at the mean stress p = T: writes sigma and the tangent C, returns the yield_state."""
+    K, G, eta, k, T, eta_g = prm
+    f_tr = J_tr + eta * p_tr - k
+    plastic = f_tr > YIELD_TOL * (k + J_tr + eta * abs(p_tr))
+    if cutoff_active(eta, k, T):
+        return cutoff_return_map(prm, p_tr, J_tr, f_tr, plastic, s, n, sigma, C)
+    if not plastic:
+        elastic_tangent(K, G, C)
+        return ELASTIC
+    # The apex: the trial beyond the corner normal cone (module doc); for
+    # eta_g > 0 the same as sqrt(J2) = J_tr - G dgamma < 0 on the cone.
+    if eta > 0.0 and G * (p_tr - k / eta) > K * eta_g * J_tr:
+        stress_from(s, 0.0, k / eta, sigma)   # sigma = (k/eta) I
+        C[:] = 0.0   # perfect plasticity: the apex stress k/eta is fixed
+        return APEX
+    cone_return(prm, p_tr, J_tr, f_tr, s, n, sigma, C)
+    return FAILURE
+
+
+@kernel
+def cutoff_return_map(prm, p_tr, J_tr, f_tr, plastic, s, n, sigma, C):
+    """:func:`return_map` with an active cut-off p <= T (regions: module doc)."""
+    K, G, eta, k, T, eta_g = prm
+    plastic = plastic or p_tr - T > YIELD_TOL * (k + J_tr + abs(p_tr))
+    J_c = k - eta * T   # sqrt(J2) at the corner, > 0
+    if not plastic:
+        elastic_tangent(K, G, C)
+        return ELASTIC
+    if J_tr > J_c and G * (p_tr - T) >= eta_g * K * (J_tr - J_c):
+        # Corner: p = T and sqrt(J2) = J_c are fixed, only the direction n of s turns.
+        stress_from(s, J_c / J_tr, T, sigma)
+        C[:] = 0.0
+        add_turn(2.0 * G * (J_c / J_tr), n, C)
+        return APEX
+    if J_tr <= J_c:
+        stress_from(s, 1.0, T, sigma)
+        elastic_tangent(0.0, G, C)   # p = T is fixed, s = s_tr: 2G P_dev
+        return CUTOFF
+    cone_return(prm, p_tr, J_tr, f_tr, s, n, sigma, C)   # here f_tr > 0 and the return has p < T
+    return FAILURE
+
+
+@kernel
+def equivalent_plastic_strain(K, G, deps, stress_n, sigma):
+    """sqrt(2/3) ``|deps_p|`` with deps_p = deps - C_e^-1 : (sigma - sigma_n),
+    C_e^-1 = P_vol / 3K + P_dev / 2G."""
+    dp = ((sigma[0] - stress_n[0]) + (sigma[1] - stress_n[1]) + (sigma[2] - stress_n[2])) / 3.0
+    ss = 0.0
+    for i in range(6):
+        ds = sigma[i] - stress_n[i]
+        e = deps[i] - ((ds - dp) / (2.0 * G) + dp / (3.0 * K) if i < 3 else ds / (2.0 * G))
+        ss += e * e
+    return math.sqrt(2.0 / 3.0) * math.sqrt(ss)
+
+
+# --- every point ----------------------------------------------------------------------------
+
+@kernel
+def cone_update(prm, deps, stress_n, eps_p_eq_n, sigma, C, eps_p_eq, yield_state):
+    """:func:`return_map` at every point from the committed stress_n; sigma holds the
+    trial stresses and gets the returned ones. Writes C and the history, eps_p_eq (grown
+    by :func:`equivalent_plastic_strain` where plastic) and yield_state."""
+    K, G = prm[0], prm[1]
+    s, n = np.empty(6), np.empty(6)
+    for i in range(deps.shape[0]):
+        p_tr, J_tr = trial_invariants(sigma[i], s, n)
+        code = return_map(prm, p_tr, J_tr, s, n, sigma[i], C[i])
+        yield_state[i], eps_p_eq[i] = code, eps_p_eq_n[i]
+        if code > ELASTIC:
+            eps_p_eq[i] += equivalent_plastic_strain(K, G, deps[i], stress_n[i], sigma[i])
 
 
 def cone_samples(tables, cut_tables, apex=True):
@@ -194,12 +269,18 @@ class ConeModel(IsotropicElasticity):
         """eta_g of the flow potential g = sqrt(J2) + eta_g p (default: associated)."""
         return self.cone[0]
 
-    def integrate(self, deps, state, guess=None):
-        stress_n = state["stress"]
+    @property
+    def prm(self):
+        """(K, G, eta, k, T, eta_g) as plain floats, as the compiled return reads them."""
         eta, k = self.cone
-        sigma, tangent, yield_state = return_map(self.trial(deps, stress_n), self.K, self.G,
-                                                 eta, k, self.tension_cutoff, self.flow_slope)
-        eps_p_eq = state["eps_p_eq"] + np.where(
-            yield_state > ELASTIC, self.equivalent_plastic_strain(deps, sigma - stress_n), 0.0)
-        return sigma, tangent, {"stress": sigma, "eps_p_eq": eps_p_eq,
-                                "yield_state": yield_state}
+        return (float(self.K), float(self.G), float(eta), float(k), float(self.tension_cutoff),
+                float(self.flow_slope))
+
+    def integrate(self, deps, state, guess=None):
+        m = len(deps)
+        deps, stress_n = np.ascontiguousarray(deps), np.ascontiguousarray(state["stress"])
+        sigma = self.trial(deps, stress_n)   # the elastic predictor, returned in place
+        C, eps_p_eq, yield_state = np.empty((m, 6, 6)), np.empty(m), np.empty(m)
+        cone_update(self.prm, deps, stress_n, np.ascontiguousarray(state["eps_p_eq"]), sigma,
+                    C, eps_p_eq, yield_state)
+        return sigma, C, {"stress": sigma, "eps_p_eq": eps_p_eq, "yield_state": yield_state}

@@ -90,11 +90,6 @@ class IsotropicElasticity(Model):
         """Elastic predictor sigma_n + C_e : deps."""
         return stress + deps @ self.stiffness
 
-    def equivalent_plastic_strain(self, deps, dsigma):
-        """sqrt(2/3) ``|deps_p|`` with deps_p = deps - C_e^-1 : dsigma."""
-        deps_p = deps - dsigma @ self.compliance
-        return np.sqrt(2.0 / 3.0) * np.linalg.norm(deps_p, axis=-1)
-
 
 @dataclasses.dataclass(frozen=True)
 class LinearElastic(IsotropicElasticity):
