@@ -44,7 +44,7 @@ for eta = 0), and then the return has three plastic regions in the trial
 The corner replaces the apex; with T >= k / eta the cut-off is inactive and
 the return is exactly that of the plain cone.
 
-Compiled per point (:mod:`.jit`): :func:`return_map` is the return of one
+Compiled per point (:mod:`soilbin.models.jit`): :func:`return_map` is the return of one
 point from its trial stress, :func:`cone_update` the loop over the points
 that :meth:`ConeModel.integrate` calls once, on the elastic predictor of
 :meth:`.elastic.IsotropicElasticity.trial` (elastic points return it exactly).

@@ -1,6 +1,6 @@
 """Return-mapping parts shared by the isotropic two-invariant soil models
 (Cam-Clay, modified Cam-Clay, the DiMaggio–Sandler and modified caps),
-per point and compiled (:mod:`.jit`).
+per point and compiled (:mod:`soilbin.models.jit`).
 
 Inside these models the geomechanics convention is used, compression positive::
 
@@ -378,7 +378,7 @@ def max_abs(r):
 
 @kernel
 def merit(r):
-    """|r|^2 / 2."""
+    """``|r|^2 / 2``."""
     return 0.5 * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3])
 
 
@@ -393,7 +393,7 @@ def all_finite(jac):
 
 @kernel
 def line_search(prm, lp, de_in, J_in, x, dx, r, halvings):
-    """The Newton step dx from x (residual r there), halved until the merit |r|^2 / 2
+    """The Newton step dx from x (residual r there), halved until the merit ``|r|^2 / 2``
     decreases (Armijo) at an admissible point. Returns (moved, x, r, jac) there."""
     m0 = merit(r)
     step = 1.0

@@ -2,7 +2,7 @@
 
 The law has the bulk law's shape, ``traction_update(jump, normal, state)
 -> (t, dt_djump, new_state)``, over contact points: compiled per point
-(:mod:`.jit`, :func:`traction_point`), one loop over the points per call. ``jump`` is
+(:mod:`soilbin.models.jit`, :func:`traction_point`), one loop over the points per call. ``jump`` is
 the displacement of the soil relative to the tool and ``normal`` the unit
 normal pointing from the soil into the tool, so g = jump·n > 0 is
 penetration. ``t`` is the traction the soil exerts on the tool::
