@@ -212,7 +212,7 @@ def critical_state_point(prm, deps, stress_n, pc_n, settings, sigma, C, s_n, s_t
         x0 = (pressure_variable(prm, p_tr), J_tr, 0.0, 0.0)
         if prm[SURFACE] == CAM_CLAY:   # its vertices first, and a bracketed start
             code, p, y, p_e, x0, converged = cam_clay_start(prm, p_n, de_v, J_tr, p_tr, pc_n)
-            J, sens, ratio = 0.0, (p_e, 0.0, 0.0, 0.0), 0.0
+            J, sens = 0.0, (p_e, 0.0, 0.0, 0.0)
         if code == FAILURE:
             lp = (p_n, de_v, J_tr, 0.0, scale, pc_n, 0.0, strain_row(prm, p_tr, scale))
             p, J, _, y, sens, ok = smooth_return(prm, lp, s_n, s_tr, x0, NO_START, settings)
