@@ -19,7 +19,6 @@ import numpy as np
 
 from ..errors import ReturnMapError
 from ..params import Params
-from ..tensors import deviator, trace
 from .jit import kernel
 
 State = dict[str, np.ndarray]
@@ -50,14 +49,6 @@ def count_nonfinite(sigma, tangent):
             total += 0.0 * tangent[i, k]
         failed += 0 if total == 0.0 else 1
     return failed
-
-
-def stress_invariants(stress):
-    """(p, s, ``|s|``) of (n, 6) Mandel stresses: the mean stress p = tr(sigma) / 3
-    (tension positive; the invariant models negate it), the deviator s and its
-    norm ``|s|`` = sqrt(2 J2)."""
-    s = deviator(stress)
-    return trace(stress) / 3.0, s, np.linalg.norm(s, axis=-1)
 
 
 @dataclasses.dataclass(frozen=True)
