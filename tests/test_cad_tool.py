@@ -12,7 +12,7 @@ from mpi4py import MPI
 from soilbin.errors import InputError
 from soilbin.meshes import scene_mesh
 from soilbin.records.scene import load_scene
-from conftest import SCENES
+from conftest import SCENES, make_problem
 
 CAD = SCENES / "tine-2in-cad.toml"
 COMM = MPI.COMM_WORLD
@@ -118,3 +118,21 @@ def test_a_tool_the_bin_cannot_hold_is_refused_before_meshing(tmp_path, override
 def test_a_scene_that_cannot_mesh_its_tool_is_refused_when_read(overrides, message):
     with pytest.raises(InputError, match=message):
         load_scene(CAD, overrides)
+
+
+
+def test_a_section_of_tetrahedra_draws_the_nodes_within_half_a_cell_of_its_plane():
+    """A tetrahedral mesh has no planes of nodes: each section of figures 8.10-8.12 draws the
+    nodes within half the median diameter of the cells at the tool of its plane (the
+    horizontal section at the tip depth held only the blade's own bottom nodes before)."""
+    from soilbin.app.section_figures import section_panels
+
+    problem = make_problem(CAD, "mesh.element_size=1.5", "mesh.growth=1.8")
+    panels, _, _, half = section_panels(problem)
+    assert 0.3 < half < 1.5
+    x = problem.nodal_displacement()[0]
+    counts = [(len(xs), np.count_nonzero(np.abs(x[:, normal] - plane) < 1e-9), len(tool))
+              for _, normal, plane, _, xs, _, tool in panels]
+    assert all(drawn >= max(on_plane, 40) and tool >= 8 for drawn, on_plane, tool in counts)
+    (_, tip_on_plane, _) = counts[1]
+    assert tip_on_plane < 40, counts   # the horizontal section at the tip: the tool's nodes

@@ -4,6 +4,7 @@ from mpi4py import MPI
 
 from ..plotting import pyplot, wrapped
 from .figure_labels import column_label
+from .section_figures import slab_half_width
 from ..records.scene import TOOL
 
 #: An estimate above this many times the curve's largest force is named in the legend only.
@@ -68,10 +69,11 @@ def tool_section_png(problem, path, depth_fraction=0.5):
     points, gap = problem.tool.gap()
     comm = problem.comm
     z_section = comm.allreduce(points[:, 2].min(initial=np.inf), op=MPI.MIN) * depth_fraction
-    spacing = comm.allreduce(np.diff(np.unique(np.round(x[:, 2], 9))).min(initial=np.inf),
-                             op=MPI.MIN)
-    near = np.abs(x[:, 2] - z_section) <= 0.5 * spacing
-    on_section = np.abs(points[:, 2] - z_section) <= 0.5 * spacing
+    # half the spacing of the planes of nodes (hexahedra), or half a cell (tetrahedra)
+    half = slab_half_width(problem) or 0.5 * comm.allreduce(
+        np.diff(np.unique(np.round(x[:, 2], 9))).min(initial=np.inf), op=MPI.MIN)
+    near = np.abs(x[:, 2] - z_section) <= half
+    on_section = np.abs(points[:, 2] - z_section) <= half
     data = comm.gather((x[near], displacement[near], points[on_section], gap[on_section]), root=0)
     if comm.rank != 0:
         return
