@@ -135,7 +135,7 @@ def test_each_tool_scene_gets_the_estimate_of_the_whole_tool():
     """run.material_draft_estimate: the scene's geometry, soil (phi, c), gravity and interface
     (delta, c_a); against the glass wall one crescent; embedded (a half model whose forces
     the tool reports for the whole tool) both."""
-    from soilbin.app.run import material_draft_estimate
+    from soilbin.app.estimates import material_draft_estimate
     from soilbin.records.scene import load_scene
 
     scene = ROOT / "scenes" / "tine-2in-90deg.toml"
@@ -164,7 +164,7 @@ def test_the_tine_scene_estimates_with_the_laboratory_strength():
     """[tool.estimate] of the tine scene: phi = 33 deg, c = 0 of section VII.5 (75 lb against
     the wall, 129 lb embedded), then the cap surface's (832, 1540 lb) beside it; a bonded tool
     is fully rough with the laboratory phi, and the cap surface's wedge cannot form then."""
-    from soilbin.app.run import draft_estimate, draft_estimates, material_draft_estimate
+    from soilbin.app.estimates import draft_estimate, draft_estimates, material_draft_estimate
     from soilbin.records.scene import load_scene
 
     scene = ROOT / "scenes" / "tine-2in-90deg.toml"
@@ -178,6 +178,32 @@ def test_the_tine_scene_estimates_with_the_laboratory_strength():
     bonded = load_scene(scene, ["tool.bonded=true"])
     assert draft_estimates(bonded) == [draft_estimate(bonded)]
     assert draft_estimate(bonded) == narrow_tine_draft(2.0, 6.0, 90.0, delta=33.0, crescents=1, **lab)
+
+
+def test_a_tool_file_is_estimated_as_the_flat_blade_of_its_width():
+    """The STEP blade (scenes/tine-2in-cad.toml, embedded) is the built-in 2-in blade 6 in
+    deep: its faces span 1 in of y, half of the blade, so McKyes & Ali gives the embedded
+    hex blade's drafts, named as a flat blade 2 in wide; against the glass wall one
+    crescent."""
+    import sys
+    sys.path.insert(0, str(ROOT / "tests"))
+    from conftest import make_problem
+    from soilbin.app.estimates import blade_of, draft_estimates
+    from soilbin.records.scene import load_scene
+
+    coarse = ["mesh.element_size=1.5", "mesh.growth=1.8"]
+    cad = make_problem(ROOT / "scenes" / "tine-2in-cad.toml", *coarse)
+    blade = blade_of(cad.scene, cad)
+    assert (blade.width, blade.depth, blade.rake, blade.crescents) == (
+        pytest.approx(2.0, rel=1e-9), 6.0, 90.0, 2)
+    assert blade_of(cad.scene) is None   # a file's width is read from its mesh
+    hexes = draft_estimates(load_scene(ROOT / "scenes" / "tine-2in-108lb.toml"))
+    files = draft_estimates(cad.scene, blade)
+    assert [f.draft for f in files] == pytest.approx([h.draft for h in hexes], rel=1e-9)
+    assert files[0].model == f"{MODEL}, as a flat blade 2 in wide"
+    wall = make_problem(ROOT / "scenes" / "tine-2in-cad.toml", *coarse,
+                        "mesh.configuration=side_wall")
+    assert blade_of(wall.scene, wall).crescents == 1
 
 
 @pytest.mark.parametrize("key, value", [("phi", "90"), ("phi", "-1"), ("c", "-0.1"), ("c", "inf"),

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from ..closed_form import MODEL, NoWedge, narrow_tine_draft, passive_wedge_strength
+from ..closed_form import NoWedge
 from ..errors import InputError
 from ..layout import CellLayout
 from ..meshes import scene_mesh
@@ -18,6 +18,7 @@ from ..remesh.mesher import read_mesh
 from ..solver.stepping import StepperResult, run_load_steps
 from . import checkpoint, figures, figures_3d, interrupt, section_figures
 from .collapse import collapse_limit, collapse_pressure
+from .estimates import blade_of, draft_estimates
 from .insitu import check_initial_stress
 from .outdir import prepare_on_rank0
 from .output import RunFolder
@@ -77,69 +78,6 @@ def headline_results(scene, records):
     values = {key: read[result.of]() for key, result in scene.headline.items()}
     return {key: None if value is None else value / scene.headline[key].divide_by
             for key, value in values.items()}
-
-
-def draft_estimate(scene):
-    """The McKyes & Ali draft that applies to the whole tool (a soil_bin scene with gravity),
-    or None: with the soil's c, phi of the scene's [tool.estimate] if it gives them, else
-    the material's (:func:`material_draft_estimate`)."""
-    if not _estimated(scene) or scene.tool.estimate is None:
-        return material_draft_estimate(scene)
-    chosen = scene.tool.estimate
-    return _mckyes_ali(scene, (chosen.phi, chosen.c, chosen.source))
-
-
-def material_draft_estimate(scene):
-    """The McKyes & Ali draft with the soil material's own c, phi or, for a cap model, its
-    failure surface's at the passive wedge's stress level (closed_form.equivalent_strength);
-    None where the soil has neither."""
-    if not _estimated(scene):
-        return None
-    soil = scene.materials[scene.regions["soil"]]
-    if hasattr(soil, "failure"):
-        strength = passive_wedge_strength(soil.failure, scene.geostatic.unit_weight,
-                                          scene.mesh.tool_depth)
-        return _mckyes_ali(scene, (strength.phi, strength.c,
-                                   f"failure surface linearised at I1 = {strength.I1:.3g} "
-                                   f"{scene.unit_system.stress}"))
-    if hasattr(soil, "phi") and hasattr(soil, "c"):
-        return _mckyes_ali(scene, (soil.phi, soil.c, f"material {scene.regions['soil']}"))
-    return None
-
-
-def _estimated(scene):
-    """Whether McKyes & Ali applies: a tool in the soil bin, under gravity."""
-    return scene.mesh_builder == "soil_bin" and scene.tool is not None and scene.geostatic is not None
-
-
-def _mckyes_ali(scene, strength):
-    """McKyes & Ali with ``strength`` (phi, c, where they come from): one side crescent
-    against the bin's glass wall, two when embedded. A bonded tool is fully rough:
-    delta = phi, c_a = c."""
-    phi, c, source = strength
-    mesh, interface = scene.mesh, scene.tool.interface
-    delta, c_a = (phi, c) if scene.tool.bonded else (interface.delta, interface.c_a)
-    try:
-        return narrow_tine_draft(width=mesh.tool_width, depth=mesh.tool_depth, rake=mesh.rake_angle,
-                                 phi=phi, delta=delta, gamma=scene.geostatic.unit_weight, c=c,
-                                 c_a=c_a, crescents=2 if mesh.tool_share < 1.0 else 1,
-                                 strength=source)
-    except NoWedge as err:
-        raise NoWedge(f"no {MODEL} estimate: {err} (phi = {phi:.3g} from the {source}, "
-                      f"delta = {delta:.3g})") from None
-
-
-def draft_estimates(scene):
-    """The draft that applies, then the material's if the scene chose another strength (left
-    out if its wedge cannot form); a NoWedge of the first is raised."""
-    first = draft_estimate(scene)
-    if first is None or scene.tool.estimate is None:
-        return [first] if first is not None else []
-    try:
-        other = material_draft_estimate(scene)
-    except NoWedge:
-        other = None
-    return [first] if other is None else [first, other]
 
 
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), resume=None,
@@ -258,7 +196,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
         **({} if remeshing is None else {"remeshes": remeshing.count}),
     }
     try:
-        estimates = draft_estimates(scene)
+        estimates = draft_estimates(scene, blade_of(scene, problem))
     except NoWedge as err:
         estimates = []
         if comm.rank == 0:
