@@ -30,7 +30,7 @@ from soilbin.closed_form.verification import (column_settlement, prandtl_limit_p
 PAGE = DOCS / "performance.md"   # the page of a run of every case
 
 FOOTING, COLUMN, TINE = "strip-footing-von-mises", "column-elastic", "tine-2in-90deg"
-STRIP_LOAD, BLOCK = "strip-load-von-mises", "block-drucker-prager"
+STRIP_LOAD, BLOCK, CAD_TINE = "strip-load-von-mises", "block-drucker-prager", "tine-2in-cad"
 #: The tine's mesh levels of docs/chapter8.md, *The tine's draft against the mesh*: (element
 #: size next to the blade [in], growth away from it); the scene's own mesh is "tine, refine=1".
 TINE_LEVELS = ((1.0, 1.3), (0.75, 1.3), (0.5, 1.3), (0.35, 1.3))
@@ -42,6 +42,11 @@ SLAB = ["mesh.dimension=3", "analysis.element=hex8-bbar"]
 #: The strip load under indirect displacement control, to 0.1 in of mean settlement.
 INDIRECT = ["loading.control=indirect_displacement", "loading.until_collapse=false",
             "loading.magnitude=0.1"]
+#: The tine case's blade read from its STEP file (scenes/tine-2in-cad.toml) on tetrahedra of
+#: tet10-bbar, with the tine case's side wall and loading: 0.1 in of travel in 8 steps.
+CAD_AS_TINE = ["mesh.configuration=side_wall", "loading.control=displacement",
+               "loading.magnitude=0.1", "loading.steps=8", "loading.first_cuts=0",
+               "loading.until_collapse=false", "output.at=[]"]
 #: A coarse mesh for quad9-bbar: edge cells of 0.02 in growing by 0.3 per in, up to 2 in.
 COARSE = ["mesh.edge_size=0.02", "mesh.size_growth=0.3", "mesh.far_size=2"]
 
@@ -63,6 +68,7 @@ def cases(quick):
                ["mesh.refine=1", "mesh.dimension=3", "analysis.element=hex27-bbar"])
     yield "column, nz=24", COLUMN, ["mesh.nz=24"]
     yield "tine, refine=1", TINE, []
+    yield "tine from a STEP file, tet10-bbar, element_size=1", CAD_TINE, CAD_AS_TINE
     if quick:
         yield ("tine, refine=1, AMG, 2 steps to 0.025 in", TINE,
                ["solver.linear=amg", "loading.steps=2", "loading.magnitude=0.025"])
