@@ -24,7 +24,7 @@ import shutil
 
 import numpy as np
 
-from soilbin.app.run import draft_estimate, material_draft_estimate
+from soilbin.app.estimates import draft_estimate, material_draft_estimate
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.closed_form import NoWedge
 from soilbin.records.scene import load_scene

@@ -132,7 +132,7 @@ def test_closed_form_imports_no_finite_element_stack():
 
 
 def test_each_tool_scene_gets_the_estimate_of_the_whole_tool():
-    """run.material_draft_estimate: the scene's geometry, soil (phi, c), gravity and interface
+    """estimates.material_draft_estimate: the scene's geometry, soil (phi, c), gravity and interface
     (delta, c_a); against the glass wall one crescent; embedded (a half model whose forces
     the tool reports for the whole tool) both."""
     from soilbin.app.estimates import material_draft_estimate

@@ -64,7 +64,7 @@ def test_the_draft_curve_draws_the_estimate_within_its_range(tine):
     """Embedded tool to 108 lb: the laboratory estimate (129 lb, within 1.3 x 108) a dashed
     line; the cap surface's (1540 lb) a number in the legend, the y axis not stretched."""
     from soilbin.app.figures import curve_figure
-    from soilbin.app.run import draft_estimates
+    from soilbin.app.estimates import draft_estimates
     lab, cap = draft_estimates(tine)
     fig = curve_figure(_steps([0.1, 0.5, 0.94], [36.0, 72.0, 108.0]), tine, [lab, cap])
     ax = fig.axes[0]
@@ -81,7 +81,7 @@ def test_the_draft_curve_draws_the_estimate_within_its_range(tine):
 
 def test_an_estimate_far_above_the_curve_stays_off_the_axes(tine):
     from soilbin.app.figures import curve_figure
-    from soilbin.app.run import draft_estimate
+    from soilbin.app.estimates import draft_estimate
     lab = draft_estimate(tine)
     ax = curve_figure(_steps([0.05, 0.1], [15.0, 21.7]), tine, [lab]).axes[0]
     assert _horizontal_lines(ax) == [] and ax.get_ylim()[1] < 30.0
