@@ -55,11 +55,13 @@ def test_two_ranks_match_serial(tmp_path, scene, overrides):
 
 @pytest.mark.slow
 def test_force_controlled_tine_with_progress_lines_matches_serial(tmp_path):
-    """The tool's bordered Newton and the tool section under two ranks; without --json the
-    progress lines are printed (rank 0 alone must not evaluate a collective for them)."""
+    """The tool's bordered Newton, the tool section and the sections of figures 8.10-8.12 under
+    two ranks; without --json the progress lines are printed (rank 0 alone must not evaluate
+    a collective for them)."""
     coarse = ["mesh.element_size=1.5", "mesh.growth=1.6", "mesh.ahead=10.0", "mesh.behind=10.0",
               "mesh.bin_width=10.0", "loading.control=force", "loading.magnitude=60",
               "loading.steps=3", "regions.soil=drucker_prager", "materials.drucker_prager.c=0.05",
+              "output.at=[40.0]",
               # the same three steps in both runs: two-rank runs are not repeatable bit for bit,
               # and the first step, 8 iterations in serial, took 10 in 1 of 8 of them, which
               # halves the next step (stepping.HARD) and changes the plastic path
@@ -72,6 +74,7 @@ def test_force_controlled_tine_with_progress_lines_matches_serial(tmp_path):
                            mpi_ranks=ranks if ranks > 1 else None)
         assert done.returncode == 0, done.stderr
         assert "step   3" in done.stderr and (out / "tool-section.png").is_file()
+        assert (out / "sections-40.png").is_file()
         curves[ranks] = curve(out / "curve.csv")
     assert len(curves[1]) == len(curves[2]) == 3
     for r1, r2 in zip(curves[1], curves[2]):

@@ -46,8 +46,9 @@ def _sections(problem):
     """(title, normal axis, plane coordinate, in-plane axes) of the three sections."""
     comm = problem.comm
     tool = np.concatenate(list(problem.tool.face_points.values()))
-    low = comm.allreduce(tool.min(axis=0, initial=np.inf), op=MPI.MIN)
-    high = comm.allreduce(tool.max(axis=0, initial=-np.inf), op=MPI.MAX)
+    # (mpi4py's MIN and MAX compare whole objects: gather the corners instead)
+    low = np.min(comm.allgather(tool.min(axis=0, initial=np.inf)), axis=0)
+    high = np.max(comm.allgather(tool.max(axis=0, initial=-np.inf)), axis=0)
     # across a symmetry plane the tool's centre line is that plane, y = low
     centre = low[1] if problem.tool.share < 1.0 else 0.5 * (low[1] + high[1])
     return [("vertical section through the tool's centre line", 1, centre, (0, 2)),
