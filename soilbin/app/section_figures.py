@@ -10,7 +10,6 @@ plane (:func:`slab_half_width`). Data are gathered to rank 0, which draws.
 """
 import numpy as np
 from dolfinx import cpp
-from mpi4py import MPI
 
 from ..plotting import pyplot, wrapped
 from .figure_labels import key_words
