@@ -120,6 +120,43 @@ def test_a_scene_that_cannot_mesh_its_tool_is_refused_when_read(overrides, messa
         load_scene(CAD, overrides)
 
 
+#: The 2-in blade (0.5 x 2 x 8 in) as gmsh scripts: on the OpenCASCADE kernel, with a
+#: physical group and a mesh size of its own that the builder must not take; on gmsh's
+#: built-in kernel, which cannot be cut out of the bin.
+GEO_BLADE = """SetFactory("OpenCASCADE");
+Mesh.MeshSizeMax = 0.05;
+Box(1) = {0, 0, 0, 0.5, 2, 8};
+Physical Volume("blade") = {1};
+"""
+GEO_BUILT_IN = """Point(1) = {0, 0, 0};
+l[] = Extrude {0.5, 0, 0} { Point{1}; };
+s[] = Extrude {0, 2, 0} { Line{l[1]}; };
+v[] = Extrude {0, 0, 8} { Surface{s[1]}; };
+"""
+
+
+def test_a_geo_script_is_a_tool_file_as_a_step_file_is(tmp_path):
+    """The blade from a .geo script (in inches: tool_scale 1) makes the STEP blade's soil:
+    the same volume and tool faces, about as many cells (the script's mesh size and physical
+    group do not reach the soil); a script on the built-in kernel is refused in one line."""
+    coarse = ["mesh.element_size=1.5", "mesh.growth=1.8"]
+    (tmp_path / "blade.geo").write_text(GEO_BLADE)
+    (tmp_path / "built-in.geo").write_text(GEO_BUILT_IN)
+    meshes = [scene_mesh(load_scene(CAD, coarse + extra), COMM) for extra in (
+        [], [f"mesh.tool_file={tmp_path / 'blade.geo'}", "mesh.tool_scale=1.0"])]
+    one = [fem.Constant(tm.mesh, 1.0) for tm in meshes]
+    volume = [total(c * ufl.dx(domain=tm.mesh)) for c, tm in zip(one, meshes)]
+    tool = [total(c * ufl.Measure("ds", domain=tm.mesh, subdomain_data=tm.facet_tags)(
+        tm.boundaries["tool"])) for c, tm in zip(one, meshes)]
+    assert volume[1] == pytest.approx(volume[0], rel=1e-9)
+    assert tool[1] == pytest.approx(tool[0], rel=1e-9) and tool[0] == pytest.approx(15.5)
+    cells = [COMM.allreduce(tm.mesh.topology.index_map(3).size_local) for tm in meshes]
+    assert cells[1] == pytest.approx(cells[0], rel=0.2)
+    assert set(meshes[1].regions) == {"soil"}
+    scene = load_scene(CAD, [f"mesh.tool_file={tmp_path / 'built-in.geo'}", "mesh.tool_scale=1.0"])
+    with pytest.raises(InputError, match=r'built-in kernel; begin it with SetFactory\("OpenCASCADE"\)'):
+        scene_mesh(scene, COMM)
+
 
 def test_a_section_of_tetrahedra_draws_the_nodes_within_half_a_cell_of_its_plane():
     """A tetrahedral mesh has no planes of nodes: each section of figures 8.10-8.12 draws the

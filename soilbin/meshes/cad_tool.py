@@ -2,9 +2,10 @@
 a soil bin of tetrahedra graded toward it.
 
 ``[mesh] builder = "soil_bin_cad", tool_file = "chisel.step", tool_scale = 0.03937``. The
-file (STEP, IGES or BREP, read by gmsh's OpenCASCADE kernel; relative to the scene's
-folder) holds one closed solid, drawn upright: z up, travel along +x. STEP and IGES
-arrive in millimetres (OpenCASCADE converts the file's own unit), BREP in its bare
+file (STEP, IGES or BREP, read by gmsh's OpenCASCADE kernel, or a gmsh ``.geo`` script
+that builds its solid with ``SetFactory("OpenCASCADE")``; relative to the scene's folder)
+holds one closed solid, drawn upright: z up, travel along +x. STEP and IGES arrive in
+millimetres (OpenCASCADE converts the file's own unit), BREP and ``.geo`` in their bare
 numbers; ``tool_scale`` turns them into the scene's length unit. The builder turns
 the solid about y by 90° − ``rake_angle`` (the top back), puts its lowest point at
 ``tool_depth`` below the ground surface z = 0, its rearmost point ``behind`` from the
@@ -38,8 +39,8 @@ class Configuration(enum.Enum):
     FULL = "full"              # the whole tool in the middle of a bin twice bin_width wide
 
 
-#: The files gmsh's OpenCASCADE kernel reads, by suffix.
-CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp")
+#: The files gmsh's OpenCASCADE kernel reads, by suffix, and gmsh's own scripts.
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp", ".geo")
 #: Default length of soil ahead of and behind the tool, in tool depths (the flat blade
 #: of chapter VIII: 18 in, 9 widths of the 2-in tool 6 in deep).
 END_DEPTHS = 3.0
@@ -49,11 +50,13 @@ FAR_SIZE = 0.25
 
 @dataclass(frozen=True)
 class CadToolParams(Params):
-    tool_file: str = param(doc="the tool's closed solid: a STEP, IGES or BREP file, relative "
-                               "to the scene's folder, drawn upright (z up, travel along +x)")
+    tool_file: str = param(doc="the tool's closed solid: a STEP, IGES or BREP file or a gmsh "
+                               ".geo script on the OpenCASCADE kernel, relative to the "
+                               "scene's folder, drawn upright (z up, travel along +x)")
     tool_scale: float = param(doc="the scene's length units per unit of the file's numbers "
                                   "(STEP and IGES arrive in millimetres: 0.03937 for a scene "
-                                  "in inches, 0.001 for one in metres)",
+                                  "in inches, 0.001 for one in metres; BREP and .geo in "
+                                  "their own numbers)",
                               lo=0.0, hi=1.0e6, lo_open=True)
     tool_depth: float = length_param(6.0, "depth of the tool's lowest point below the surface")
     rake_angle: float = param(90.0, lo=30.0, hi=90.0,

@@ -18,6 +18,11 @@ from .cad_tool import CadToolParams, Configuration
 CELLS_PER_CUBE = 6.0
 #: A face lies on a plane of the bin where its centre does, to this part of the bin's size.
 ON_PLANE = 1e-9
+#: The meshing options a tool's .geo script may set, put back after it has run.
+SCRIPT_OPTIONS = ("Mesh.MeshSizeMin", "Mesh.MeshSizeMax", "Mesh.MeshSizeFactor",
+                  "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
+                  "Mesh.MeshSizeExtendFromBoundary", "Mesh.Algorithm", "Mesh.Algorithm3D",
+                  "Mesh.ElementOrder", "Mesh.RecombineAll")
 
 
 def geometry(p: CadToolParams, simplices: bool):
@@ -54,10 +59,13 @@ def _read_solid(path):
     occ = gmsh.model.occ
     try:
         with _c_stdout_silenced():
-            shapes = occ.importShapes(path)
+            shapes = _run_script(path) if path.lower().endswith(".geo") else occ.importShapes(path)
+    except InputError:
+        raise
     except Exception as err:   # gmsh raises a bare Exception with its logger's last error
         raise InputError(f"mesh.tool_file = {path!r}: gmsh cannot read it ({err}); accepted: "
-                         "a STEP, IGES or BREP file holding one closed solid") from None
+                         "a STEP, IGES or BREP file holding one closed solid, or a .geo "
+                         "script building one") from None
     volumes = [s for s in shapes if s[0] == 3]
     if not volumes:
         raise InputError(f"mesh.tool_file = {path!r}: holds no closed solid (only "
@@ -67,6 +75,24 @@ def _read_solid(path):
     occ.remove([s for s in shapes if s[0] < 3], recursive=True)
     occ.synchronize()
     return volumes
+
+
+def _run_script(path):
+    """The OpenCASCADE entities a gmsh .geo script builds in the (empty) model. Its physical
+    groups are dropped (the builder names the soil's) and its options do not outlive it; a
+    script on gmsh's built-in kernel is refused (no boolean cut of the bin by it)."""
+    options = {name: gmsh.option.getNumber(name) for name in SCRIPT_OPTIONS}
+    try:
+        gmsh.merge(path)
+    finally:
+        for name, value in options.items():
+            gmsh.option.setNumber(name, value)
+    gmsh.model.removePhysicalGroups()
+    shapes = gmsh.model.occ.getEntities()
+    if not shapes and gmsh.model.getEntities(3):
+        raise InputError(f"mesh.tool_file = {path!r}: the script builds its solid on gmsh's "
+                         'built-in kernel; begin it with SetFactory("OpenCASCADE");')
+    return shapes
 
 
 @contextlib.contextmanager
