@@ -218,7 +218,11 @@ def main():
         known = {name for name, _, _ in cases(quick=False)} | {name for name, _, _ in cases(quick=True)}
         kept = [r for r in json.loads((args.out / "results.json").read_text()) if r["case"] in known]
         results = [fresh.pop(r["case"], r) for r in kept] + list(fresh.values())
-    text = markdown(results, " ".join(["OMP_NUM_THREADS=1 python", *sys.argv]))
+    command = " ".join(["OMP_NUM_THREADS=1 python", *sys.argv])
+    if args.update:   # the table is a whole run's with some rows measured again
+        command = (f"OMP_NUM_THREADS=1 python scripts/benchmark.py`, the rows of "
+                   f"{', '.join(args.only or ['every case'])} again by `{command}")
+    text = markdown(results, command)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "results.json").write_text(json.dumps(results, indent=1))
     (args.out / "results.md").write_text(text)
