@@ -148,7 +148,7 @@ def measure(name, scene, overrides):
     return {"case": name, "overrides": overrides, **json.loads(proc.stdout.strip().splitlines()[-1])}
 
 
-def markdown(results, command):
+def markdown(results, command, again=None):
     def row(cells):
         return "| " + " | ".join(map(str, cells)) + " |"
     head = ["case", "element", "linear solver", "dofs", "load steps", "Newton (failed)",
@@ -180,7 +180,7 @@ def markdown(results, command):
               "form compilation + solve); memory = peak resident set. Serial runs on a machine "
               "shared with other jobs (CPU time, not wall time, is comparable).",
               f"Machine: nproc {len(os.sched_getaffinity(0))}, {cpu}; "
-              f"command: `{command}`"]
+              f"command: `{command}`" + (f"; rows measured again by `{again}`" if again else "")]
     return "\n".join(lines) + "\n"
 
 
@@ -219,10 +219,10 @@ def main():
         kept = [r for r in json.loads((args.out / "results.json").read_text()) if r["case"] in known]
         results = [fresh.pop(r["case"], r) for r in kept] + list(fresh.values())
     command = " ".join(["OMP_NUM_THREADS=1 python", *sys.argv])
-    if args.update:   # the table is a whole run's with some rows measured again
-        command = (f"OMP_NUM_THREADS=1 python scripts/benchmark.py`, the rows of "
-                   f"{', '.join(args.only or ['every case'])} again by `{command}")
-    text = markdown(results, command)
+    if args.update:   # a whole run's table with some of its rows measured again
+        text = markdown(results, "OMP_NUM_THREADS=1 python scripts/benchmark.py", again=command)
+    else:
+        text = markdown(results, command)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "results.json").write_text(json.dumps(results, indent=1))
     (args.out / "results.md").write_text(text)
