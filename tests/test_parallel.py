@@ -33,6 +33,11 @@ def curve(path):
     ("strip-footing-penetration", [arg for key in ("mesh.edge_size=0.05", "loading.magnitude=0.1",
                                                    "loading.steps=10", "remesh.every=4")
                                    for arg in ("--set", key)]),
+    # remeshing tetrahedra: rank 0 meshes the gathered boundary triangles
+    ("block-drucker-prager", [arg for key in ("analysis.element=tet10-bbar",
+                                              "analysis.large_deformation=true",
+                                              "remesh.every=4", "loading.magnitude=0.1",
+                                              "loading.steps=10") for arg in ("--set", key)]),
 ])
 @pytest.mark.slow
 def test_two_ranks_match_serial(tmp_path, scene, overrides):

@@ -11,7 +11,8 @@ from conftest import SCENES
 from soilbin.app.run import run_scene
 from soilbin.errors import InputError
 from soilbin.records.scene import load_scene
-from soilbin.remesh.outline import chain
+from soilbin.remesh.outline import OutlineError, chain
+from soilbin.remesh.surface import Surface
 from soilbin.remesh.transfer import OldCells
 from test_checkpoint import curve, stop_and_resume
 
@@ -19,6 +20,11 @@ from test_checkpoint import curve, stop_and_resume
 #: where the mesh's quality falls below 0.3.
 FOOTING = ("mesh.edge_size=0.05", "loading.magnitude=0.06", "loading.steps=6",
            "loading.first_cuts=0", "remesh.every=3")
+
+#: The Drucker–Prager block on tetrahedra compressed by a tenth of its height in large
+#: deformation, remeshed every 4 steps.
+BLOCK_3D = ("analysis.element=tet10-bbar", "analysis.large_deformation=true", "remesh.every=4",
+            "loading.magnitude=0.1", "loading.steps=10")
 
 
 def distorted_quadrilaterals():
@@ -51,6 +57,76 @@ def test_a_linear_field_is_transferred_exactly():
                        rtol=0.0, atol=1e-12)
     assert np.allclose(old.at_nodes(field(corners), located), field(targets), rtol=0.0,
                        atol=1e-12)
+
+
+def test_a_linear_field_is_transferred_exactly_between_tetrahedra():
+    """As in the plane: the linear fit through four points of each old tetrahedron and the
+    nodal interpolation over the old tetrahedra reproduce a linear field."""
+    cube = np.array([[i, j, k] for k in (0, 1) for j in (0, 1) for i in (0, 1)], dtype=float)
+    cube = cube + 0.1 * cube[:, [1, 2, 0]] ** 2                      # distorted
+    # the six tetrahedra around the cube's diagonal 0-7
+    corners = cube[[[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7],
+                    [0, 4, 6, 7]]]
+    old = OldCells(corners, simplex=True)
+    field = lambda x: np.stack([1.0 + 2.0 * x[..., 0] - 3.0 * x[..., 1] + x[..., 2],
+                                0.5 * x[..., 2]], axis=-1)
+    rng = np.random.default_rng(2)
+    samples = np.einsum("nqk,nkd->nqd", rng.dirichlet(np.ones(4), (6, 4)), corners)
+    targets = np.einsum("mk,mkd->md", rng.dirichlet(np.ones(4), 100),
+                        corners[rng.integers(0, 6, 100)])
+    located = old.locate(targets)
+    assert np.allclose(old.at_points(samples, field(samples), located), field(targets),
+                       rtol=0.0, atol=1e-12)
+    assert np.allclose(old.at_nodes(field(corners), located), field(targets), rtol=0.0,
+                       atol=1e-12)
+
+
+def box_surface(tags):
+    """The closed surface of the unit cube, two triangles a face, the six faces tagged
+    ``tags`` (xmin, xmax, ymin, ymax, zmin, zmax), each triangle listed in any order."""
+    corners = []
+    for axis in range(3):
+        for side in (0.0, 1.0):
+            u, v = [a for a in range(3) if a != axis]
+            square = np.zeros((4, 3))
+            square[:, axis] = side
+            square[:, u], square[:, v] = [0, 1, 1, 0], [0, 0, 1, 1]
+            corners += [square[[0, 1, 2]], square[[0, 2, 3]]]
+    return np.array(corners), np.repeat(tags, 2)
+
+
+def test_the_surface_is_cut_into_patches_at_folds_and_at_group_borders():
+    corners, tags = box_surface([1, 2, 3, 4, 5, 6])
+    assert len(np.unique(Surface.of(corners, tags).patches(np.radians(40.0)))) == 6
+    assert len(np.unique(Surface.of(corners, np.ones(12, dtype=int)).patches(np.radians(40.0)))) == 6
+    assert len(np.unique(Surface.of(corners, np.ones(12, dtype=int)).patches(np.radians(100.0)))) == 1
+    split = tags.copy()
+    split[11] = 7   # one triangle of the top face in a group of its own: a border on a flat face
+    assert len(np.unique(Surface.of(corners, split).patches(np.radians(40.0)))) == 7
+    with pytest.raises(OutlineError, match="do not close"):
+        Surface.of(corners[:-1], tags[:-1])
+
+
+def test_a_remeshed_homogeneous_block_keeps_its_state_exactly_in_3d(tmp_path):
+    """The Drucker–Prager block in uniaxial compression on tetrahedra, in large deformation,
+    remeshed twice: a uniform state is moved over exactly (no Newton iteration to
+    re-equilibrate), and the block carries its collapse stress 2c cos φ / (1 − sin φ) to the end."""
+    scene = load_scene(SCENES / "block-drucker-prager.toml", BLOCK_3D)
+    summary = run_scene(scene, tmp_path)
+    assert summary["status"] == "complete" and summary["remeshes"] == 2
+    with open(tmp_path / "remeshes.csv") as f:
+        reports = list(csv.DictReader(f))
+    for report in reports:
+        assert float(report["residual_transferred"]) < 1e-12
+        assert int(report["newton_iterations"]) == 0
+        assert float(report["force_after"]) == pytest.approx(float(report["force_before"]),
+                                                            rel=1e-12)
+        assert abs(float(report["volume_change"])) < 1e-8            # the grid's rounding
+        assert int(report["cells_after"]) > 0
+    assert summary["collapse_stress"] == pytest.approx(2 * 500.0 * np.cos(np.radians(30.0))
+                                                       / (1 - np.sin(np.radians(30.0))), rel=1e-9)
+    files = sorted((tmp_path / "meshes").iterdir())
+    assert all(set(meshio.read(name).cells_dict) == {"tetra", "triangle"} for name in files)
 
 
 def test_one_point_per_cell_is_transferred_as_its_cell_value():
@@ -135,9 +211,12 @@ def test_each_mesh_is_a_grid_of_fields_xdmf_and_a_gmsh_file(tmp_path):
     assert all(set(meshio.read(name).cells_dict) == {"quad", "line"} for name in files)
 
 
-def test_a_run_stopped_after_a_remesh_resumes_on_the_new_mesh(tmp_path):
+@pytest.mark.parametrize("name, overrides, step", [
+    ("strip-footing-penetration", FOOTING, 4),
+    ("block-drucker-prager", BLOCK_3D, 5)])
+def test_a_run_stopped_after_a_remesh_resumes_on_the_new_mesh(tmp_path, name, overrides, step):
     (whole, whole_curve), (resumed, resumed_curve) = stop_and_resume(
-        tmp_path, "strip-footing-penetration", FOOTING, 4)
+        tmp_path, name, overrides, step)
     assert resumed["status"] == whole["status"] == "complete"
     assert resumed["remeshes"] == whole["remeshes"]
     assert resumed["newton_iterations"] == whole["newton_iterations"]
@@ -147,7 +226,7 @@ def test_a_run_stopped_after_a_remesh_resumes_on_the_new_mesh(tmp_path):
 
 @pytest.mark.parametrize("overrides, words", [
     (["analysis.large_deformation=false"], "needs analysis.large_deformation = true"),
-    (["mesh.dimension=3", "analysis.element=hex8-bbar"], "two-dimensional"),
+    (["mesh.dimension=3", "analysis.element=hex8-bbar"], "or tetrahedra"),
     (["remesh.min_quality=1.5"], "remesh.min_quality"),
 ])
 def test_remeshing_a_scene_it_cannot_is_refused_on_reading(overrides, words):

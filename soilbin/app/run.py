@@ -35,15 +35,16 @@ class _Current:
         return getattr(self.problem, name)
 
 
-def resumed_mesh(comm, earlier, out_dir):
-    """The remeshed mesh a checkpoint was on, read from its run folder and copied into this
-    run's (so that this run can be resumed in turn)."""
+def resumed_mesh(comm, earlier, out_dir, dimension):
+    """The remeshed mesh (of ``dimension``) a checkpoint was on, read from its run folder and
+    copied into this run's (so that this run can be resumed in turn)."""
     source = Path(earlier.folder) / earlier.mesh["file"]
     if comm.rank == 0:
         target = Path(out_dir) / earlier.mesh["file"]
         target.parent.mkdir(exist_ok=True)
         shutil.copyfile(source, target)
-    return read_mesh(comm, source, earlier.mesh["regions"], earlier.mesh["boundaries"])
+    return read_mesh(comm, source, earlier.mesh["regions"], earlier.mesh["boundaries"],
+                     dimension)
 
 
 def folded_at_step(records):
@@ -100,7 +101,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     remeshed = earlier is not None and earlier.mesh is not None
     with interrupt.kept():
         tagged = (scene_mesh(scene, comm) if not remeshed else
-                  resumed_mesh(comm, earlier, out_dir))
+                  resumed_mesh(comm, earlier, out_dir, scene.analysis.element.dimension))
     check_initial_stress(scene, tagged)
     problem = SoilProblem(scene, tagged)
     problem.newton.on_iterate = iterate_progress

@@ -486,13 +486,15 @@ def _parse(raw, path):
 
 def _check_remesh(dimension, analysis, regions, tool):
     """Remeshing meshes the deformed soil afresh: the soil moves with the mesh (large
-    deformation), and the remesher takes one soil region of a two-dimensional mesh."""
+    deformation), and the remesher takes one soil region of a two-dimensional mesh or of a
+    tetrahedral one."""
     if not analysis.large_deformation:
         raise InputError("[remesh] needs analysis.large_deformation = true (in small strain the "
                          "mesh does not move)")
-    if dimension != 2:
-        raise InputError("[remesh]: remeshing takes two-dimensional (plane-strain) meshes; this "
-                         "scene's mesh is three-dimensional")
+    if dimension == 3 and not analysis.element.simplex:
+        raise InputError(f"[remesh]: remeshing takes two-dimensional (plane-strain) meshes or "
+                         f"tetrahedra (analysis.element = tet10 or tet10-bbar); this scene's "
+                         f"mesh is of {analysis.element.value}")
     if len(regions) != 1 or tool is not None or any(analysis.frame_rotation):
         raise InputError("[remesh]: remeshing takes one soil region, no [tool] and no "
                          "analysis.frame_rotation")

@@ -1,4 +1,6 @@
-"""The deformed soil meshed afresh by gmsh (two-dimensional): the outline's polygon, each of its
+"""The deformed soil meshed afresh by gmsh.
+
+Two-dimensional (:func:`mesh_outline`): the outline's polygon, each of its
 edges a line of one segment (two with quadrilaterals: Blossom's full-quad recombination meshes
 at twice the size and splits every cell in four, and needs an even boundary; the remesher
 samples the outline accordingly, :meth:`.outline.Outline.resampled`), element
@@ -7,8 +9,17 @@ carrying each node's initial element size), and the element's cells: triangles, 
 quadrilaterals by Blossom's full-quad recombination (plain Blossom leaves triangles).
 
 gmsh's compound curves would let the new boundary drop old nodes, but gmsh 4.8 then reports the
-compound's elements for each of its curves, and DOLFINx's reader crashes on the repeats."""
+compound's elements for each of its curves, and DOLFINx's reader crashes on the repeats.
+
+Three-dimensional (:func:`mesh_surface`, tetrahedra): the boundary's triangles become discrete
+surfaces, one per patch of one facet group between folds of more than :data:`CREASE` (the
+tool's faces, the bin's sides), which gmsh maps onto a plane each (``createGeometry``: a patch
+must be a topological disc) and meshes afresh (MeshAdapt: on the mapped patches of the tine's
+soil Frontal-Delaunay leaves hundreds of inverted triangles) with the volume they close, at
+the sizes of the background field. gmsh's own ``classifySurfaces`` does not cut at a group's
+border where the boundary is flat (the footing beside the free surface)."""
 import dataclasses
+import math
 
 import gmsh
 import numpy as np
@@ -16,11 +27,15 @@ import numpy as np
 from ..meshes.tagged import check_cells, distribute
 
 
+#: Where the boundary folds by more than this (radians), gmsh cuts it into patches.
+CREASE = math.radians(40.0)
+
+
 @dataclasses.dataclass(frozen=True)
 class Sizes:
-    """The element sizes asked for: linear over ``triangles`` (m, 3, 2) from the ``values``
-    (m, 3) at their corners."""
-    triangles: np.ndarray
+    """The element sizes asked for: linear over the simplices ``cells`` (m, d + 1, d; d = 2:
+    the x-z plane) from the ``values`` (m, d + 1) at their corners."""
+    cells: np.ndarray
     values: np.ndarray
 
 
@@ -51,36 +66,81 @@ def mesh_outline(comm, outline, sizes, regions, boundaries, simplices, path):
             if tag in groups:
                 gmsh.model.addPhysicalGroup(1, groups[tag], tag)
                 gmsh.model.setPhysicalName(1, tag, group)
-        _size_field(sizes.triangles, sizes.values)
+        _size_field(sizes)
         if not simplices:
             gmsh.option.setNumber("Mesh.RecombineAll", 1)
-        _generate()
+        _generate(2)
         check_cells(RuntimeError, "the remesher made", 2, simplices)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        gmsh.option.setNumber("Mesh.Binary", 1)   # the coordinates to the last bit
-        gmsh.write(str(path))
-        return regions, {g: t for g, t in boundaries.items()}
+        _write(path)
+        return regions, dict(boundaries)
     return distribute(comm, "remesh", model, dimension=2)
 
 
-def read_mesh(comm, path, regions, boundaries):
+def mesh_surface(comm, surface, sizes, regions, boundaries, path):
+    """The TaggedMesh of tetrahedra inside the closed :class:`~.surface.Surface` ``surface``
+    (rank 0; None elsewhere), distributed and written to the gmsh file ``path``; ``sizes``,
+    ``regions``, ``boundaries`` as :func:`mesh_outline`'s."""
+    def model():
+        gmsh.model.add("remesh")
+        mesh = gmsh.model.mesh
+        patch_of = surface.patches(CREASE)
+        patches = [gmsh.model.addDiscreteEntity(2) for _ in range(patch_of.max() + 1)]
+        mesh.addNodes(2, patches[0], np.arange(1, len(surface.points) + 1),
+                      surface.points.ravel())
+        first, groups = 1, {}
+        for patch, entity in enumerate(patches):
+            mine = patch_of == patch
+            triangles = surface.triangles[mine] + 1
+            mesh.addElementsByType(entity, 2, np.arange(first, first + len(triangles)),
+                                   triangles.ravel())
+            first += len(triangles)
+            groups[entity] = surface.tags[mine][0]
+        mesh.createTopology()
+        mesh.createGeometry()
+        faces = [entity for _, entity in gmsh.model.getEntities(2)]
+        volume = gmsh.model.geo.addVolume([gmsh.model.geo.addSurfaceLoop(faces)])
+        gmsh.model.geo.synchronize()
+        (name, region), = regions.items()
+        gmsh.model.addPhysicalGroup(3, [volume], region)
+        gmsh.model.setPhysicalName(3, region, name)
+        for group, tag in boundaries.items():
+            members = [patch for patch, of in groups.items() if of == tag]
+            if members:
+                gmsh.model.addPhysicalGroup(2, members, tag)
+                gmsh.model.setPhysicalName(2, tag, group)
+        _size_field(sizes)
+        gmsh.option.setNumber("Mesh.Algorithm", 1)   # MeshAdapt (module doc)
+        _generate(3)
+        check_cells(RuntimeError, "the remesher made", 3, True)
+        _write(path)
+        return regions, dict(boundaries)
+    return distribute(comm, "remesh", model, dimension=3)
+
+
+def read_mesh(comm, path, regions, boundaries, dimension=2):
     """The TaggedMesh a remesh wrote to ``path``; ``regions``, ``boundaries``: group name ->
     tag, as the mesh was made with."""
     def model():
         gmsh.open(str(path))
         return dict(regions), dict(boundaries)
-    return distribute(comm, str(path), model, dimension=2)
+    return distribute(comm, str(path), model, dimension=dimension)
 
 
-def _size_field(triangles, node_sizes):
-    """The background size: linear over the old cells (triangles in the x-z plane)."""
+def _write(path):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    gmsh.option.setNumber("Mesh.Binary", 1)   # the coordinates to the last bit
+    gmsh.write(str(path))
+
+
+def _size_field(sizes):
+    """The background size: linear over the old cells' simplices (in 2D triangles in the x-z
+    plane)."""
     view = gmsh.view.add("initial element size")
-    m = len(triangles)
-    x = triangles[:, :, 0]
-    zeros = np.zeros_like(x)
-    z = triangles[:, :, 1]
-    data = np.hstack([x, zeros, z, node_sizes]).ravel()   # per triangle: xs, ys, zs, values
-    gmsh.view.addListData(view, "ST", m, data.tolist())
+    cells = sizes.cells
+    m, k, d = cells.shape
+    x = [cells[:, :, 0], cells[:, :, 1] if d == 3 else np.zeros((m, k)), cells[:, :, d - 1]]
+    data = np.hstack([*x, sizes.values]).ravel()   # per simplex: xs, ys, zs, values
+    gmsh.view.addListData(view, "SS" if d == 3 else "ST", m, data.tolist())
     fields = gmsh.model.mesh.field
     field = fields.add("PostView")
     fields.setNumber(field, "ViewTag", view)
@@ -92,12 +152,12 @@ def _size_field(triangles, node_sizes):
         gmsh.option.setNumber(option, value)
 
 
-def _generate():
+def _generate(dimension):
     """Mesh; gmsh's errors (logged, General.AbortOnError = 1) raised as a RuntimeError."""
     gmsh.option.setNumber("General.AbortOnError", 1)
     gmsh.logger.start()
     try:
-        gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.generate(dimension)
         errors = [line for line in gmsh.logger.get() if line.startswith("Error")]
     finally:
         gmsh.logger.stop()

@@ -106,8 +106,15 @@ def chain(edges, tags):
 
 
 def initial_sizes(corners, initial, simplices):
-    """Each cell's element size as built, from its corners at the start (n, k, 2): √A of a
-    quadrilateral, the side of the equilateral triangle of its area."""
+    """Each cell's element size as built, from its corners at the start (n, k, d): √A of a
+    quadrilateral, the side of the equilateral triangle of its area, the edge of the regular
+    tetrahedron of its volume, (6√2 V)^(1/3)."""
+    if initial.shape[2] == 3:
+        if not simplices:
+            raise ValueError("a three-dimensional remesh takes tetrahedra")
+        edges = initial[:, 1:] - initial[:, :1]
+        volume = np.abs(np.linalg.det(edges)) / 6.0
+        return np.cbrt(6.0 * np.sqrt(2.0) * volume)
     x, z = initial[..., 0], initial[..., 1]
     if simplices:
         area = 0.5 * np.abs((x[:, 1] - x[:, 0]) * (z[:, 2] - z[:, 0])

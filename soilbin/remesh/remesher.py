@@ -29,9 +29,10 @@ from ..layout import GLOBAL, NODES, POINTS, CellLayout
 from ..problem import SoilProblem
 from ..problem.loads import start_mean_pressure
 from ..solver.quadrature import quadrature_space
-from .mesher import Sizes, mesh_outline
+from .mesher import Sizes, mesh_outline, mesh_surface
 from .outline import OutlineError, gather_outline, initial_sizes
-from .transfer import OldCells, cell_triangles
+from .surface import gather_surface
+from .transfer import OldCells, cell_simplices
 
 #: gmsh's input rounded to this fraction of the mesh's extent: the mesh a remesh makes must
 #: not depend on round-off (partitioned runs sum their forces in another order, and gmsh's
@@ -145,17 +146,22 @@ class Remeshing:
         start = time.perf_counter()
         comm, tagged, scene = old.comm, old.tagged, self.scene
         element = old.disc.element
-        outline = gather_outline(tagged)
+        planar = old.disc.planar
+        boundary = gather_outline(tagged) if planar else gather_surface(tagged)
         layout = CellLayout(old)
         state = layout.gather_state(old.state())
         samples = layout.gather(layout.by_cell(POINTS, _point_coordinates(old)))
         sizes = None
         if comm.rank == 0:
-            outline, sizes = self._mesher_input(state, outline, element.simplex)
+            boundary, sizes = self._mesher_input(state, boundary, element.simplex,
+                                                 old.disc.dimension)
         mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
-        new_tagged = mesh_outline(comm, outline, sizes, dict(tagged.regions),
-                                  dict(tagged.boundaries), element.simplex,
-                                  self.folder / mesh_file)
+        groups = dict(tagged.regions), dict(tagged.boundaries)
+        if planar:
+            new_tagged = mesh_outline(comm, boundary, sizes, *groups, element.simplex,
+                                      self.folder / mesh_file)
+        else:
+            new_tagged = mesh_surface(comm, boundary, sizes, *groups, self.folder / mesh_file)
         self.mesh_file = mesh_file
         mesh_s = time.perf_counter() - start
         new = SoilProblem(scene, new_tagged)
@@ -172,18 +178,23 @@ class Remeshing:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
         return new, mesh_s
 
-    def _mesher_input(self, state, outline, simplices):
-        """(the outline sampled at the sizes, the :class:`~.mesher.Sizes`) on rank 0, on the
-        grid of :data:`GRAIN` (the old corners in ``state`` too, for the transfer)."""
-        corners = state["kinematics/mesh_x"][1][:, :, :2]
+    def _mesher_input(self, state, boundary, simplices, d):
+        """(the boundary: in 2D the outline sampled at the sizes, in 3D the surface; the
+        :class:`~.mesher.Sizes`) on rank 0, on the grid of :data:`GRAIN` (the old corners in
+        ``state`` too, for the transfer); ``d``: the mesh's dimension."""
+        corners = state["kinematics/mesh_x"][1][:, :, :d]
         if self._sizes is None:
-            initial = corners - state["kinematics/total_displacement"][1][:, :, :2]
+            initial = corners - state["kinematics/total_displacement"][1][:, :, :d]
             self._sizes = initial_sizes(corners, initial, simplices)
         grain = GRAIN * np.abs(corners).max()
-        corners = state["kinematics/mesh_x"][1][:, :, :2] = _rounded(corners, grain)
-        outline = dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain))
-        sizes, at_vertices = _size_field(corners, self._sizes, simplices, outline)
+        corners = state["kinematics/mesh_x"][1][:, :, :d] = _rounded(corners, grain)
+        sizes, at_node = _size_field(corners, self._sizes, simplices)
         sizes = dataclasses.replace(sizes, values=_rounded(sizes.values, grain))
+        if d == 3:
+            return boundary.on_grid(grain), sizes
+        outline = dataclasses.replace(boundary, vertices=_rounded(boundary.vertices, grain))
+        _, vertex = cKDTree(at_node[0]).query(outline.vertices)   # they are old nodes
+        at_vertices = at_node[1][vertex]
         # full-quad recombination halves the boundary's segments: sample it twice as long
         outline = outline.resampled(_rounded(at_vertices, grain) * (1.0 if simplices else 2.0))
         return dataclasses.replace(outline, vertices=_rounded(outline.vertices, grain)), sizes
@@ -206,13 +217,14 @@ class Remeshing:
 
 def _transfer(state, target, samples, points, element, sizes):
     """Fill ``target`` (the new problem's gathered state) from ``state`` (the old one's), on
-    rank 0: ``samples`` (n_old, q, 2) are the old quadrature points, ``points`` (n_new, q, 2)
+    rank 0: ``samples`` (n_old, q, d) are the old quadrature points, ``points`` (n_new, q, d)
     the new ones. Returns the new cells' sizes: ``sizes`` (of the old cells) of the old cell
     each new cell's centre lies in."""
-    old = OldCells(state["kinematics/mesh_x"][1][:, :, :2], element.simplex)
-    at_points = old.locate(points.reshape(-1, 2))
+    d = samples.shape[2]
+    old = OldCells(state["kinematics/mesh_x"][1][:, :, :d], element.simplex)
+    at_points = old.locate(points.reshape(-1, d))
     new_corners = target["kinematics/mesh_x"][1]
-    at_nodes = old.locate(new_corners[:, :, :2].reshape(-1, 2))
+    at_nodes = old.locate(new_corners[:, :, :d].reshape(-1, d))
     for name, (kind, values) in target.items():
         if kind == GLOBAL:
             target[name] = state[name]
@@ -222,25 +234,25 @@ def _transfer(state, target, samples, points, element, sizes):
     total = state["kinematics/total_displacement"][1]
     moved = old.at_nodes(total, at_nodes)
     target["kinematics/total_displacement"] = (NODES, moved.reshape(new_corners.shape))
-    _, holding = old.locate(new_corners[:, :, :2].mean(axis=1))
+    _, holding = old.locate(new_corners[:, :, :d].mean(axis=1))
     return sizes[old.parent[holding]]
 
 
-def _size_field(corners, sizes, simplices, outline):
+def _size_field(corners, sizes, simplices):
     """(:class:`~.mesher.Sizes` over the old cells, each corner the mean initial size of the
-    cells around it; that size at each vertex of the outline)."""
-    flat = corners.reshape(-1, 2)
+    cells around it; (the old nodes, that size at each))."""
+    d = corners.shape[2]
+    flat = corners.reshape(-1, d)
     nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
     total, count = np.zeros(len(nodes)), np.zeros(len(nodes))
     np.add.at(total, inverse, np.repeat(sizes, corners.shape[1]))
     np.add.at(count, inverse, 1.0)
     at_node = total / count
     at_corner = at_node[inverse].reshape(corners.shape[:2])
-    split = cell_triangles(simplices)
-    triangles = np.concatenate([corners[:, list(t)] for t in split])
+    split = cell_simplices(simplices, d)
+    cells = np.concatenate([corners[:, list(t)] for t in split])
     values = np.concatenate([at_corner[:, list(t)] for t in split])
-    _, vertex = cKDTree(nodes).query(outline.vertices)   # the outline's vertices are old nodes
-    return Sizes(triangles, values), at_node[vertex]
+    return Sizes(cells, values), (nodes, at_node)
 
 
 def _rounded(x, grain):
@@ -249,9 +261,9 @@ def _rounded(x, grain):
 
 
 def _point_coordinates(problem):
-    """(n_points, 2): where this rank's quadrature points are now."""
+    """(n_points, d): where this rank's quadrature points are now."""
     points = problem.points
-    return points.evaluate(points.expression(ufl.SpatialCoordinate(problem.mesh)))[:, :2]
+    return points.evaluate(points.expression(ufl.SpatialCoordinate(problem.mesh)))
 
 
 def soil_integrals(problem):

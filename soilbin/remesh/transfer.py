@@ -2,16 +2,17 @@
 
 Quadrature data: each old cell's values at its points become one linear polynomial of the
 current coordinates, fitted by least squares through them (three terms through the 2 x 2
-Gauss points of a quadrilateral, the three of a quadratic triangle's rule, ...; the one
-point of a reduced rule gives the cell's value); a new point
+Gauss points of a quadrilateral, the three of a quadratic triangle's rule, four through the
+four points of a quadratic tetrahedron's; the one point of a reduced rule gives the cell's
+value); a new point
 takes the polynomial of the old cell it lies in, evaluated there: the cell-wise recovery of the
 RITSS method (Hu and Randolph 1998, "A practical numerical approach for large deformation
 problems in soil", IJNAMG 22, 327-350), which keeps a field's gradient inside a cell and
 smooths nothing across cells. Nodal data (the total displacement): linear interpolation of the
-old nodes' values over the old cells cut into triangles (exact at the old nodes, continuous).
-A point is found in the old cells cut into triangles (affine, so no inverse map of a distorted
-quadrilateral can fail); a point that no old cell holds (round-off at the boundary) takes its
-nearest cell. Fields that a return map keeps on a yield surface are not kept there by the fit:
+old nodes' values over the old cells cut into simplices (exact at the old nodes, continuous).
+A point is found in the old cells cut into simplices (triangles; tetrahedra are their own:
+affine, so no inverse map of a distorted quadrilateral can fail); a point that no old cell
+holds (round-off at the boundary) takes its nearest cell. Fields that a return map keeps on a yield surface are not kept there by the fit:
 the re-equilibration (:mod:`.remesher`) returns them.
 """
 import numpy as np
@@ -22,36 +23,45 @@ from mpi4py import MPI
 
 #: A DOLFINx quadrilateral's corners as two triangles.
 QUADRILATERAL_TRIANGLES = ((0, 1, 3), (0, 3, 2))
+#: The simplex of each dimension, as UFL names it.
+SIMPLEX = {2: "triangle", 3: "tetrahedron"}
 
 
-def cell_triangles(simplex):
-    """The corners of a cell's triangles: the triangle itself, or a quadrilateral's two."""
-    return ((0, 1, 2),) if simplex else QUADRILATERAL_TRIANGLES
+def cell_simplices(simplex, dimension=2):
+    """The corners of a cell's simplices: the simplex itself, or a quadrilateral's two
+    triangles (hexahedra are not cut: a three-dimensional remesh takes tetrahedra)."""
+    if simplex:
+        return (tuple(range(dimension + 1)),)
+    if dimension != 2:
+        raise ValueError("hexahedra are not cut into simplices")
+    return QUADRILATERAL_TRIANGLES
 
 
 class OldCells:
-    """The old mesh on rank 0 alone, cut into triangles, to find points in: ``corners``
-    (n, k, 2), the old cells' corners in the DOLFINx order, in the input cell order."""
+    """The old mesh on rank 0 alone, cut into simplices, to find points in: ``corners``
+    (n, k, d), the old cells' corners in the DOLFINx order, in the input cell order
+    (d = 2: the x-z plane)."""
 
     def __init__(self, corners, simplex):
-        split = cell_triangles(simplex)
+        self._dim = dim = corners.shape[2]
+        split = cell_simplices(simplex, dim)
         self._pieces = len(split)
-        flat = corners.reshape(-1, 2)
+        flat = corners.reshape(-1, dim)
         self._nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
         self._node_of = inverse.reshape(corners.shape[:2])
-        # triangle j of cell c is row c * pieces + j
-        triangles = np.stack([self._node_of[:, list(t)] for t in split], axis=1).reshape(-1, 3)
-        domain = ufl.Mesh(ufl.VectorElement("Lagrange", "triangle", 1))
-        self.mesh = create_mesh(MPI.COMM_SELF, triangles.astype(np.int64), self._nodes, domain)
-        #: the old cell (input number) of each triangle of :attr:`mesh`
+        # simplex j of cell c is row c * pieces + j
+        pieces = np.stack([self._node_of[:, list(t)] for t in split], axis=1).reshape(-1, dim + 1)
+        domain = ufl.Mesh(ufl.VectorElement("Lagrange", SIMPLEX[dim], 1))
+        self.mesh = create_mesh(MPI.COMM_SELF, pieces.astype(np.int64), self._nodes, domain)
+        #: the old cell (input number) of each simplex of :attr:`mesh`
         self.parent = np.asarray(self.mesh.topology.original_cell_index) // self._pieces
-        self._tree = geometry.BoundingBoxTree(self.mesh, 2)
+        self._tree = geometry.BoundingBoxTree(self.mesh, dim)
         self._midpoints = None
 
     def locate(self, points):
-        """(points as 3-vectors, the triangle of :attr:`mesh` holding each point (m, 2)); the
-        nearest triangle where none does."""
-        x = np.column_stack([points, np.zeros(len(points))])
+        """(points as 3-vectors, the simplex of :attr:`mesh` holding each point (m, d)); the
+        nearest simplex where none does."""
+        x = np.column_stack([points, np.zeros((len(points), 3 - self._dim))])
         candidates = geometry.compute_collisions(self._tree, x)
         colliding = geometry.compute_colliding_cells(self.mesh, candidates, x)
         offsets = colliding.offsets
@@ -61,30 +71,30 @@ class OldCells:
         if not found.all():
             if self._midpoints is None:
                 self._midpoints = geometry.create_midpoint_tree(
-                    self.mesh, 2, np.arange(len(self.parent), dtype=np.int32))
+                    self.mesh, self._dim, np.arange(len(self.parent), dtype=np.int32))
             cells[~found] = geometry.compute_closest_entity(self._tree, self._midpoints,
                                                             self.mesh, x[~found])
         return x, cells
 
     def at_points(self, samples, values, located):
-        """Values (n, q, ...) of every old cell at its points ``samples`` (n, q, 2), fitted
+        """Values (n, q, ...) of every old cell at its points ``samples`` (n, q, d), fitted
         linearly (module doc) and evaluated at ``located`` (:meth:`locate`'s); (m, ...)."""
         n, q = values.shape[:2]
         shape = values.shape[2:]
         centre = samples.mean(axis=1, keepdims=True)
-        basis = np.concatenate([np.ones((n, q, 1)), samples - centre], axis=2)   # (n, q, 3)
+        basis = np.concatenate([np.ones((n, q, 1)), samples - centre], axis=2)   # (n, q, 1 + d)
         normal = np.einsum("nqa,nqb->nab", basis, basis)
         right = np.einsum("nqa,nqk->nak", basis, values.reshape(n, q, -1))
         # least squares, or the cell's value with no gradient where one point (a reduced rule)
-        coefficients = np.linalg.pinv(normal) @ right                         # (n, 3, k)
-        x, triangles = located
-        cell = self.parent[triangles]
-        local = np.concatenate([np.ones((len(x), 1)), x[:, :2] - centre[cell, 0]], axis=1)
+        coefficients = np.linalg.pinv(normal) @ right                         # (n, 1 + d, k)
+        x, simplices = located
+        cell = self.parent[simplices]
+        local = np.concatenate([np.ones((len(x), 1)), x[:, :self._dim] - centre[cell, 0]], axis=1)
         return np.einsum("ma,mak->mk", local, coefficients[cell]).reshape((len(x),) + shape)
 
     def at_nodes(self, values, located):
         """Values (n, k, ...) at every old cell's corners, interpolated linearly over the
-        triangles and evaluated at ``located``; (m, ...)."""
+        simplices and evaluated at ``located``; (m, ...)."""
         shape = values.shape[2:]
         k = int(np.prod(shape, dtype=int))
         per_node = np.empty((len(self._nodes), k))
@@ -92,9 +102,9 @@ class OldCells:
         space = (fem.VectorFunctionSpace(self.mesh, ("Lagrange", 1), dim=k) if k > 1 else
                  fem.FunctionSpace(self.mesh, ("Lagrange", 1)))
         field = fem.Function(space)
-        geometry_nodes = self.mesh.geometry.dofmap.array.reshape(-1, 3)
+        geometry_nodes = self.mesh.geometry.dofmap.array.reshape(-1, self._dim + 1)
         node = np.asarray(self.mesh.geometry.input_global_indices)[geometry_nodes]
-        dofs = space.dofmap.list.array.reshape(-1, 3)
+        dofs = space.dofmap.list.array.reshape(-1, self._dim + 1)
         field.x.array.reshape(-1, k)[dofs] = per_node[node]
         x, cells = located
         return field.eval(x, cells).reshape((len(x),) + shape)

@@ -1,0 +1,78 @@
+"""The three-dimensional soil as it stands after a converged step, gathered on rank 0 for the
+remesher: its boundary as one closed surface of tagged triangles, each turned outward."""
+import dataclasses
+
+import numpy as np
+from dolfinx.cpp.mesh import entities_to_geometry
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from ..layout import gather_rows
+from .outline import OutlineError
+
+
+@dataclasses.dataclass(frozen=True)
+class Surface:
+    """A closed surface: ``points`` (n, 3), ``triangles`` (m, 3) into them, each numbered
+    counter-clockwise seen from outside, and the facet group tag of each (``tags``, m)."""
+    points: np.ndarray
+    triangles: np.ndarray
+    tags: np.ndarray
+
+    @classmethod
+    def of(cls, corners, tags):
+        """The surface of the triangles ``corners`` (m, 3, 3), outward, with ``tags``: shared
+        corners made one point, the triangles in an order of their own (not that in which
+        ranks gathered them). OutlineError unless every edge joins exactly two triangles."""
+        points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+        triangles = index.reshape(-1, 3)
+        order = np.lexsort(np.sort(triangles, axis=1).T[::-1])
+        triangles, tags = triangles[order], np.asarray(tags)[order]
+        edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+        _, count = np.unique(edges, axis=0, return_counts=True)
+        if (count != 2).any():
+            raise OutlineError("the tagged boundary facets do not close the soil (a boundary "
+                               "facet in no facet group)")
+        return cls(points, triangles, tags)
+
+    def patches(self, crease):
+        """The patch of each triangle (m,): the surface cut along the borders of its facet
+        groups and where it folds by more than ``crease`` (radians) between two triangles."""
+        a, b, c = (self.points[self.triangles[:, k]] for k in range(3))
+        normal = np.cross(b - a, c - a)
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        edges = np.sort(self.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+        owner = np.repeat(np.arange(len(self.triangles)), 3)
+        order = np.lexsort(edges.T[::-1])
+        first, second = owner[order[0::2]], owner[order[1::2]]   # each edge's two triangles
+        smooth = ((self.tags[first] == self.tags[second])
+                  & (np.einsum("ij,ij->i", normal[first], normal[second]) > np.cos(crease)))
+        m = len(self.triangles)
+        joined = coo_matrix((np.ones(smooth.sum()), (first[smooth], second[smooth])), shape=(m, m))
+        return connected_components(joined, directed=False)[1]
+
+    def on_grid(self, grain):
+        """The surface with its points rounded to a grid of ``grain``."""
+        return Surface.of(np.round(self.points[self.triangles] / grain) * grain, self.tags)
+
+
+def gather_surface(tagged):
+    """The tagged boundary facets of a three-dimensional mesh as a :class:`Surface`, on rank 0
+    (None elsewhere; collective)."""
+    mesh = tagged.mesh
+    owned = mesh.topology.index_map(2).size_local
+    keep = tagged.facet_tags.indices < owned
+    facets = tagged.facet_tags.indices[keep].astype(np.int32)
+    x = mesh.geometry.x
+    corners = x[entities_to_geometry(mesh._mesh, 2, facets, False)[:, :3]]   # 0.5: the C++ mesh
+    mesh.topology.create_connectivity(2, 3)
+    to_cell = mesh.topology.connectivity(2, 3)
+    cells = to_cell.array[to_cell.offsets[facets]]       # a boundary facet's one cell
+    inside = x[entities_to_geometry(mesh._mesh, 3, cells, False)[:, :4]].mean(axis=1)
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    inward = np.einsum("ij,ij->i", normal, corners[:, 0] - inside) < 0.0
+    corners[inward] = corners[inward][:, [0, 2, 1]]
+    rows = gather_rows(mesh.comm, np.column_stack([corners.reshape(-1, 9),
+                                                   tagged.facet_tags.values[keep]]))
+    return None if rows is None else Surface.of(rows[:, :9].reshape(-1, 3, 3),
+                                                rows[:, 9].astype(int))
