@@ -34,6 +34,10 @@ class CellLayout:
         n_local = cells.size_local + cells.num_ghosts
         self.number = np.asarray(mesh.topology.original_cell_index)[:n_local]
         self.tables, self.contact = problem.entities()
+        # this rank's rows among the contact points gathered one rank after another
+        n_contact = 0 if self.contact is None else len(self.contact)
+        first = self.comm.exscan(n_contact) or 0
+        self._contact_rows = slice(first, first + n_contact)
         nodes = mesh.geometry.dofmap.array.reshape(n_local, -1)
         self.centres = mesh.geometry.x[nodes].mean(axis=1)   # taken before the mesh moves
 
@@ -45,7 +49,10 @@ class CellLayout:
         return values[table[:self.n_owned]]
 
     def local(self, kind, stored):
-        """This rank's array (ghosts included) from the stored (n_global, k, ...) one."""
+        """This rank's array (ghosts included) from the stored (n_global, k, ...) one; for the
+        contact points this rank's rows of the gathered ones (:meth:`gather_state`)."""
+        if kind == CONTACT:
+            return stored[self._contact_rows]
         table = self.tables[kind]
         out = np.empty((table.max(initial=-1) + 1,) + stored.shape[2:], dtype=stored.dtype)
         out[table] = stored[self.number]

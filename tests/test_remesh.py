@@ -9,7 +9,7 @@ import pytest
 
 from conftest import SCENES
 from soilbin.app.run import run_scene
-from soilbin.errors import InputError
+from soilbin.errors import ConvergenceError, InputError
 from soilbin.records.scene import load_scene
 from soilbin.remesh.outline import OutlineError, chain
 from soilbin.remesh.surface import Surface
@@ -191,6 +191,61 @@ def test_a_remeshed_footing_comes_back_to_equilibrium_with_its_state(tmp_path, e
                                                             rel=0.03)
     pressures = [row["pressure"] for row in curve(tmp_path)]
     assert 80.0 < pressures[-1] < 100.0   # near (2 + pi) c = 89.98 at 3% of B
+
+
+def test_a_re_equilibration_that_fails_goes_in_stages_to_the_same_equilibrium(tmp_path,
+                                                                             monkeypatch):
+    """Where Newton from the transferred state fails, the transfer's out-of-balance is
+    released in stages from the same committed history: the same equilibrium."""
+    from soilbin.remesh import remesher
+    scene = load_scene(SCENES / "strip-footing-penetration.toml", FOOTING)
+    run_scene(scene, tmp_path / "direct")
+    equilibrated = remesher._equilibrated
+
+    def failing_first(problem):
+        solve = problem.solve
+
+        def fails_once():
+            problem.solve = solve
+            raise ConvergenceError("a test's failure")
+        problem.solve = fails_once
+        return equilibrated(problem)
+    monkeypatch.setattr(remesher, "_equilibrated", failing_first)
+    run_scene(scene, tmp_path / "staged")
+    reports = []
+    for run in ("direct", "staged"):
+        with open(tmp_path / run / "remeshes.csv") as f:
+            reports.append(list(csv.DictReader(f)))
+    assert len(reports[0]) == len(reports[1]) >= 2
+    for direct, staged in zip(*reports):
+        assert int(staged["newton_iterations"]) >= remesher.RELEASE_STAGES
+        assert float(staged["residual_equilibrated"]) <= 1e-6
+        assert float(staged["residual_transferred"]) == pytest.approx(
+            float(direct["residual_transferred"]), rel=1e-6)
+        assert float(staged["force_after"]) == pytest.approx(float(direct["force_after"]),
+                                                             rel=1e-6)
+    for mine, theirs in zip(curve(tmp_path / "staged"), curve(tmp_path / "direct")):
+        assert mine["force"] == pytest.approx(theirs["force"], rel=1e-5)
+
+
+def test_a_remeshed_soil_against_a_rough_wall_keeps_its_contact(tmp_path):
+    """The rough wall pushed 0.05 in into Drucker–Prager sand in large deformation, remeshed
+    every 3 steps: the interface's state moves with the soil (the tool's normals, the slip,
+    the jump at rest), the soil comes back to equilibrium, and the passive force at the end
+    is that of the run that never remeshed to 1%."""
+    wall = ["analysis.large_deformation=true", "loading.magnitude=0.05", "loading.steps=5"]
+    never = run_scene(load_scene(SCENES / "retaining-wall-passive-rough.toml", wall),
+                      tmp_path / "never")
+    summary = run_scene(load_scene(SCENES / "retaining-wall-passive-rough.toml",
+                                   [*wall, "remesh.every=3"]), tmp_path / "remeshed")
+    assert summary["status"] == "complete" and summary["remeshes"] == 2
+    with open(tmp_path / "remeshed" / "remeshes.csv") as f:
+        for report in csv.DictReader(f):
+            assert float(report["residual_equilibrated"]) <= 1e-6
+            assert float(report["force_after"]) == pytest.approx(float(report["force_before"]),
+                                                                rel=0.04)
+    assert summary["passive_coefficient"] == pytest.approx(never["passive_coefficient"],
+                                                           rel=0.01)
 
 
 def test_each_mesh_is_a_grid_of_fields_xdmf_and_a_gmsh_file(tmp_path):

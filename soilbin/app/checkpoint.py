@@ -141,7 +141,11 @@ class Checkpoint:
                 continue
             state[name] = (values if kind == GLOBAL else values[contact] if kind == CONTACT
                            else cells.local(kind, values))
-        problem.restore(state)
+        try:
+            problem.restore(state)
+        except KeyError as err:
+            raise InputError(f"--resume {self.folder}: the checkpoint lacks {err} (written by "
+                             f"another version of soilbin); run the scene afresh") from None
 
 
 def _match(stored, local, tolerance):

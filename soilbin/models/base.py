@@ -89,6 +89,12 @@ class Model(Params, abc.ABC):
             state["stress"][:] = stress0
         return state
 
+    def consistent_history(self, state) -> State:
+        """``state`` with the history variables that the model ties to one another made
+        consistent again, after a transfer that moved each by itself (remeshing); here
+        none are tied."""
+        return state
+
     def update(self, deps, state, guess=None):
         """(sigma, C_tan, new_state) for the strain increment ``deps`` (n, 6) from
         the committed ``state``; neither input is modified. ``guess``, if given, is

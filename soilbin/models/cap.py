@@ -570,6 +570,12 @@ class CapModel(IsotropicElasticity):
             state["cap_X"][L == self.L_min] = X0
         return state
 
+    def consistent_history(self, state):
+        """The cap's centre from its end, L = max(kappa(X), L_min): a transfer that fits L
+        and X one by one leaves X a little off X(L) where the cap has not retreated, a cap
+        behind its centre that the return cannot take (its local Newton does not converge)."""
+        return {**state, "cap_L": np.maximum(self.kappa(state["cap_X"]), self.L_min)}
+
     def integrate(self, deps, state, guess=None):
         m = len(deps)
         guess = state if guess is None else guess

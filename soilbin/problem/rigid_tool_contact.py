@@ -99,20 +99,20 @@ class RigidToolContact:
         self.dofs = nodal_dofs[self.nodes].astype(PETSc.IntType)
         self._free = ~fixed[self.dofs]                    # (n_points, dof components)
         self.law = law
-        x = scalar_space.tabulate_dof_coordinates()[self.nodes, :disc.dimension]
-        self.reference_points = disc.to_world(x)          # on the initial mesh
-        # A tool wished in place carries the in-situ traction t0 = -σ0 n: the jump
-        # is offset by t0_n n / k_n + t0_t / k_s, so that the law returns t0 at zero jump.
-        self._jump0 = np.zeros((len(self.nodes), 3))
+        self._dimension, self._to_world = disc.dimension, disc.to_world
+        self.reference_points = self.positions()          # on the initial mesh
+        # The jump is u_n + u − U: the soil's committed displacement at the point, with the
+        # offset of a tool wished in place, which carries the in-situ traction t0 = -σ0 n:
+        # t0_n n / k_n + t0_t / k_s, so that the law returns t0 at zero displacement.
+        self._committed_offset = np.zeros((len(self.nodes), 3))
         if initial_stress is not None:
             t0 = -np.einsum("pij,pj->pi", from_mandel(initial_stress(self.reference_points)),
                             self.normals)
             t0_n = np.einsum("pi,pi->p", t0, self.normals)[:, None] * self.normals
-            self._jump0 = t0_n / law.k_n + (t0 - t0_n) / law.k_s
+            self._committed_offset = t0_n / law.k_n + (t0 - t0_n) / law.k_s
         self.committed = law.initial_state(len(self.nodes))
         self.trial = self.committed
         self._w, self._incremental = w, incremental
-        self._committed_displacement = np.zeros((len(self.nodes), 3))
         self.tool_displacement = np.zeros(3)
         self._traction = np.zeros((len(self.nodes), 3))
         self._tangent = np.zeros((len(self.nodes), 3, 3))
@@ -129,13 +129,15 @@ class RigidToolContact:
         b.destroy()
         return values
 
-    def _soil_displacement(self):
+    def _soil_offset(self):
+        """u_n + u: the committed offset (the in-situ offset and the soil's committed
+        displacement) and the unknown's displacement at the contact points."""
         u = np.zeros((len(self.dofs), 3))
         u[:, self.axes] = self._w.x.array[self.dofs]
-        return self._committed_displacement + u
+        return self._committed_offset + u
 
     def jump(self):
-        return self._soil_displacement() - self.tool_displacement + self._jump0
+        return self._soil_offset() - self.tool_displacement
 
     def update(self):
         """The interface law at the current iterate (call once per iterate)."""
@@ -176,7 +178,7 @@ class RigidToolContact:
     def commit(self):
         self.committed = self.trial
         if self._incremental:   # the unknown restarts from zero after the commit
-            self._committed_displacement = self._soil_displacement()
+            self._committed_offset = self._soil_offset()
 
     def contact_keys(self):
         """What tells the contact points apart on any partition: the tag of the face and
@@ -184,13 +186,23 @@ class RigidToolContact:
         faces = np.repeat(self._face_tags, self.points_per_face)
         return np.column_stack([faces, self.reference_points])
 
+    def positions(self):
+        """Where the contact points are now, (n, 3) world axes (the mesh moves in large
+        deformation)."""
+        x = self.scalar_space.tabulate_dof_coordinates()[self.nodes, :self._dimension]
+        return self._to_world(x)
+
     def state(self):
-        """The committed law state and soil displacement at the contact points."""
-        return {"committed_displacement": (CONTACT, self._committed_displacement),
+        """The committed law state and offset (the soil's displacement and the in-situ
+        offset) at the contact points, and the tool's normal there (a remeshed soil's face
+        against the tool is not quite flat: the law keeps the tool's)."""
+        return {"committed_offset": (CONTACT, self._committed_offset),
+                "normals": (CONTACT, self.normals),
                 **{f"law/{key}": (CONTACT, value) for key, value in self.committed.items()}}
 
     def restore(self, state):
-        self._committed_displacement = state["committed_displacement"]
+        self._committed_offset = state["committed_offset"]
+        self.normals = state["normals"]
         self.committed = self.trial = {key: state[f"law/{key}"] for key in self.committed}
 
     def force(self):

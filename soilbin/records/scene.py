@@ -471,7 +471,7 @@ def _parse(raw, path):
     output = from_table(Output, raw.get("output", {}), "output")
     remesh = from_table(Remesh, raw.get("remesh", {}), "remesh")
     if remesh.active:
-        _check_remesh(builder.dimension(mesh), analysis, regions, tool)
+        _check_remesh(builder.dimension(mesh), analysis, regions)
     for i, value in enumerate(output.at):
         if not 0.0 < value <= loading.magnitude:
             raise InputError(f"output.at[{i}] = {value!r} is outside (0, loading.magnitude = "
@@ -484,10 +484,10 @@ def _parse(raw, path):
                  remesh=remesh)
 
 
-def _check_remesh(dimension, analysis, regions, tool):
+def _check_remesh(dimension, analysis, regions):
     """Remeshing meshes the deformed soil afresh: the soil moves with the mesh (large
     deformation), and the remesher takes one soil region of a two-dimensional mesh or of a
-    tetrahedral one."""
+    tetrahedral one, unturned."""
     if not analysis.large_deformation:
         raise InputError("[remesh] needs analysis.large_deformation = true (in small strain the "
                          "mesh does not move)")
@@ -495,8 +495,8 @@ def _check_remesh(dimension, analysis, regions, tool):
         raise InputError(f"[remesh]: remeshing takes two-dimensional (plane-strain) meshes or "
                          f"tetrahedra (analysis.element = tet10 or tet10-bbar); this scene's "
                          f"mesh is of {analysis.element.value}")
-    if len(regions) != 1 or tool is not None or any(analysis.frame_rotation):
-        raise InputError("[remesh]: remeshing takes one soil region, no [tool] and no "
+    if len(regions) != 1 or any(analysis.frame_rotation):
+        raise InputError("[remesh]: remeshing takes one soil region and no "
                          "analysis.frame_rotation")
 
 

@@ -6,13 +6,16 @@ at the same load before the next step.
 State by ``layout`` kind (the problem's :meth:`~soilbin.problem.SoilProblem.state`): the
 quadrature points' stress and history by the cell-wise fit of :mod:`.transfer` (the first
 iterate's tangent is the new problem's elastic one: a fitted consistent tangent took more
-iterations); the total displacement (of the mesh's nodes from the initial configuration)
+iterations); the tool's contact state (its law's history and the jump at rest) from the
+nearest old contact point of the same face; the total displacement (of the mesh's nodes from the initial configuration)
 interpolated from the old nodes; the unknowns start from zero (the increment of the next
 step; a mean-dilatation element's pressure from the transferred mean stress); the load
-factor, the driven boundary's state and the force scale unchanged. The re-equilibration is
-one Newton solve at that load factor with the return map, which takes a transferred stress
-outside its yield surface back to it; its first and last residuals are reported with the
-soil's volume and its integral of the equivalent plastic strain before and after.
+factor, the driven boundary's state and the force scale unchanged. Each model then makes the
+history variables it ties together consistent again (the caps' centre from their end). The
+re-equilibration is one Newton solve at that load factor with the return map, which takes a
+transferred stress outside its yield surface back to it (where it fails, the same in stages:
+:func:`_equilibrated`); its first and last residuals are reported with the soil's volume and
+its integral of the equivalent plastic strain before and after.
 """
 import dataclasses
 import time
@@ -25,7 +28,8 @@ from mpi4py import MPI
 from scipy.spatial import cKDTree
 
 from ..errors import ConvergenceError
-from ..layout import GLOBAL, NODES, POINTS, CellLayout
+from ..solver.newton import NewtonResult
+from ..layout import CONTACT, GLOBAL, NODES, POINTS, CellLayout, gather_rows
 from ..problem import SoilProblem
 from ..problem.loads import start_mean_pressure
 from ..solver.quadrature import quadrature_space
@@ -38,6 +42,8 @@ from .transfer import OldCells, cell_simplices
 #: not depend on round-off (partitioned runs sum their forces in another order, and gmsh's
 #: Delaunay and recombination decide differently on points a rounding apart).
 GRAIN = 1e-9
+#: Stages of a re-equilibration that did not converge in one (:func:`_equilibrated`).
+RELEASE_STAGES = 4
 #: The run folder's folder of the meshes that remeshing made.
 MESHES = "meshes"
 
@@ -114,7 +120,7 @@ class Remeshing:
         transfer_s = time.perf_counter() - start - mesh_s
         new.set_load_factor(record.load_factor)
         try:
-            result = new.solve()
+            result = _equilibrated(new)
         except ConvergenceError as err:
             raise RemeshError(f"after remeshing at step {record.step} the soil did not come back "
                               f"to equilibrium at the same load ({err})") from None
@@ -151,6 +157,7 @@ class Remeshing:
         layout = CellLayout(old)
         state = layout.gather_state(old.state())
         samples = layout.gather(layout.by_cell(POINTS, _point_coordinates(old)))
+        contact = _contact_points(old)
         sizes = None
         if comm.rank == 0:
             boundary, sizes = self._mesher_input(state, boundary, element.simplex,
@@ -169,11 +176,15 @@ class Remeshing:
         self.layout = new_layout = CellLayout(new)
         target = new_layout.gather_state(new.state())
         x = new_layout.gather(new_layout.by_cell(POINTS, _point_coordinates(new)))
+        new_contact = _contact_points(new)
         if comm.rank == 0:
             self._sizes = _transfer(state, target, samples, x, element, self._sizes)
+            if contact is not None:
+                _transfer_contact(state, target, contact, new_contact)
         target = comm.bcast(target, root=0)
         new.restore({name: values if kind == GLOBAL else new_layout.local(kind, values)
                      for name, (kind, values) in target.items()})
+        new.points.settle_history()
         if element.mixed:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
         return new, mesh_s
@@ -215,6 +226,28 @@ class Remeshing:
         self.mesh_file, self.layout = mesh_file, layout
 
 
+def _equilibrated(problem):
+    """Newton at the load factor from the transferred state; where it fails, the transfer's
+    out-of-balance R_0 is released in :data:`RELEASE_STAGES` equal parts (R = (1 − k/n) R_0,
+    k = 1 … n, each stage from the last one's solution; the committed history is the
+    transferred one throughout). Returns a NewtonResult (the stages' iterations, the first
+    and last residual); ConvergenceError if a stage fails."""
+    try:
+        return problem.solve()
+    except ConvergenceError:
+        problem.roll_back()
+    newton, iterations = problem.newton, 0
+    try:
+        first = newton.hold_out_of_balance(1.0 - 1.0 / RELEASE_STAGES)
+        for k in range(1, RELEASE_STAGES + 1):
+            newton.hold_out_of_balance(1.0 - k / RELEASE_STAGES)   # the last: 0, as it was
+            result = problem.solve()
+            iterations += result.iterations
+    finally:
+        newton.hold_out_of_balance(0.0)
+    return NewtonResult(iterations, (first, result.residuals[-1]))
+
+
 def _transfer(state, target, samples, points, element, sizes):
     """Fill ``target`` (the new problem's gathered state) from ``state`` (the old one's), on
     rank 0: ``samples`` (n_old, q, d) are the old quadrature points, ``points`` (n_new, q, d)
@@ -236,6 +269,34 @@ def _transfer(state, target, samples, points, element, sizes):
     target["kinematics/total_displacement"] = (NODES, moved.reshape(new_corners.shape))
     _, holding = old.locate(new_corners[:, :, :d].mean(axis=1))
     return sizes[old.parent[holding]]
+
+
+def _transfer_contact(state, target, old, new):
+    """The tool's contact state in ``target`` from ``state`` (both gathered, on rank 0): each
+    new contact point takes that of the nearest old point of the same face (``old``, ``new``:
+    face tag and position of each, (n, 4)); the law and its offset (the jump at rest) travel
+    with the soil, the re-equilibration settles the tractions. RuntimeError if a face of the
+    new mesh has no old contact point."""
+    rows = np.empty(len(new), dtype=np.int64)
+    for face in np.unique(new[:, 0]):
+        mine, theirs = np.flatnonzero(new[:, 0] == face), np.flatnonzero(old[:, 0] == face)
+        if not len(theirs):
+            raise RuntimeError(f"the tool's face {int(face)} had no contact points before the "
+                               f"remesh")
+        rows[mine] = theirs[cKDTree(old[theirs, 1:]).query(new[mine, 1:])[1]]
+    for name, (kind, _) in target.items():
+        if kind == CONTACT:
+            target[name] = (kind, state[name][1][rows])
+
+
+def _contact_points(problem):
+    """The face tag and position of every contact point of the tool, gathered on rank 0 (None
+    elsewhere, and without a tool; collective)."""
+    if problem.tool is None:
+        return None
+    interface = problem.tool.interface
+    faces = interface.contact_keys()[:, :1]
+    return gather_rows(problem.comm, np.column_stack([faces, interface.positions()]))
 
 
 def _size_field(corners, sizes, simplices):

@@ -97,6 +97,7 @@ class NewtonSolver:
         self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
         self._nodal_terms = tuple(nodal_terms)
+        self._held, self._held_fraction = None, 0.0   # hold_out_of_balance
         self._border = border
         self._opts = options
         self._b = fem.petsc.create_vector(self._L)
@@ -144,12 +145,30 @@ class NewtonSolver:
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         for term in self._nodal_terms:
             term.add_residual(b)
+        if self._held is not None:
+            b.axpy(-self._held_fraction, self._held)
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
         norm = b.norm()
         if self._border is not None:
             self._border_g = self._border.residual()
             norm = math.hypot(norm, self._border_g)
         return norm
+
+    def hold_out_of_balance(self, fraction):
+        """From now on solve R(w) = ``fraction`` R(w_0), R(w_0) the residual at the current
+        ``w`` when first called (its norm is returned): a state out of equilibrium (a
+        remeshed soil's) brought to it in stages of ``fraction``; 0 ends the holding."""
+        if fraction == 0.0:
+            if self._held is not None:
+                self._held.destroy()
+            self._held = None
+            return 0.0
+        if self._held is None:
+            held = self._b.duplicate()
+            self._held_norm = self.residual(held)
+            self._held = held
+        self._held_fraction = fraction
+        return self._held_norm
 
     def _bc_mismatch(self, x):
         """Whether x misses a prescribed value (else the lifting term is zero)."""

@@ -201,6 +201,13 @@ class MaterialPoints:
         self._converged_tangent = state["converged_tangent"]
         self.update()
 
+    def settle_history(self):
+        """Each region's committed history made consistent by its model
+        (:meth:`~soilbin.models.base.Model.consistent_history`), after a transfer."""
+        self.committed = {name: self.models[name].consistent_history(state)
+                          for name, state in self.committed.items()}
+        self.trial = dict(self.committed)
+
     def history(self, key):
         """A committed history variable over all local points (n_points, ...), zero where absent."""
         states = [(self.index[name], s[key]) for name, s in self.committed.items() if key in s]
