@@ -6,9 +6,10 @@ at the same load before the next step.
 State by ``layout`` kind (the problem's :meth:`~soilbin.problem.SoilProblem.state`): the
 quadrature points' stress and history by the cell-wise fit of :mod:`.transfer` (the first
 iterate's tangent is the new problem's elastic one: a fitted consistent tangent took more
-iterations); the tool's contact state (its law's history and the jump at rest) from the
-nearest old contact point of the same face; the total displacement (of the mesh's nodes from the initial configuration)
-interpolated from the old nodes; the unknowns start from zero (the increment of the next
+iterations); the tool's contact state (its law's history, the jump at rest, the tool's
+normal) from the nearest old contact point of the same face; the total displacement (of the
+mesh's nodes from the initial configuration) interpolated from the old nodes; the unknowns
+start from zero (the increment of the next
 step; a mean-dilatation element's pressure from the transferred mean stress); the load
 factor, the driven boundary's state and the force scale unchanged. Each model then makes the
 history variables it ties together consistent again (the caps' centre from their end). The
@@ -28,10 +29,10 @@ from mpi4py import MPI
 from scipy.spatial import cKDTree
 
 from ..errors import ConvergenceError
-from ..solver.newton import NewtonResult
 from ..layout import CONTACT, GLOBAL, NODES, POINTS, CellLayout, gather_rows
 from ..problem import SoilProblem
 from ..problem.loads import start_mean_pressure
+from ..solver.newton import NewtonResult
 from ..solver.quadrature import quadrature_space
 from .mesher import Sizes, mesh_outline, mesh_surface
 from .outline import OutlineError, gather_outline, initial_sizes
