@@ -9,10 +9,10 @@ iterate's tangent is the new problem's elastic one: a fitted consistent tangent 
 iterations); the tool's contact state (its law's history, the jump at rest, the tool's
 normal) from the nearest old contact point of the same face; the total displacement (of the
 mesh's nodes from the initial configuration) interpolated from the old nodes; the unknowns
-start from zero (the increment of the next
-step; a mean-dilatation element's pressure from the transferred mean stress); the load
-factor, the driven boundary's state and the force scale unchanged. Each model then makes the
-history variables it ties together consistent again (the caps' centre from their end). The
+start from zero (the increment of the next step; a mean-dilatation element's pressure from
+the transferred mean stress); the load factor, the driven boundary's state and the force
+scale unchanged. Each model then makes the history variables it ties together consistent
+again (the caps' centre from their end). The
 re-equilibration is one Newton solve at that load factor with the return map, which takes a
 transferred stress outside its yield surface back to it (where it fails, the same in stages:
 :func:`_equilibrated`); its first and last residuals are reported with the soil's volume and
