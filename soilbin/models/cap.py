@@ -571,10 +571,12 @@ class CapModel(IsotropicElasticity):
         return state
 
     def consistent_history(self, state):
-        """The cap's centre from its end, L = max(kappa(X), L_min): a transfer that fits L
-        and X one by one leaves X a little off X(L) where the cap has not retreated, a cap
-        behind its centre that the return cannot take (its local Newton does not converge)."""
-        return {**state, "cap_L": np.maximum(self.kappa(state["cap_X"]), self.L_min)}
+        """The cap's end not below L_min, and its centre from it, L = max(kappa(X), L_min): a
+        transfer that fits L and X one by one leaves X a little off X(L) where the cap has
+        not retreated, a cap behind its centre, and beside a point at L_min takes X below
+        it; the return takes neither (its local Newton does not converge)."""
+        X = np.maximum(state["cap_X"], self.L_min)
+        return {**state, "cap_X": X, "cap_L": np.maximum(self.kappa(X), self.L_min)}
 
     def integrate(self, deps, state, guess=None):
         m = len(deps)

@@ -302,7 +302,12 @@ def _contact_points(problem):
 
 def _size_field(corners, sizes, simplices):
     """(:class:`~.mesher.Sizes` over the old cells, each corner the mean initial size of the
-    cells around it; (the old nodes, that size at each))."""
+    cells around it, in 3D each tetrahedron its own; (the old nodes, the mean at each)).
+
+    Tetrahedra keep their own sizes: the mean at the nodes smooths the graded field each
+    time, and gmsh's tetrahedra coarsened by 2-8% a remesh (the tine from a STEP file,
+    remeshed every 2 steps: 2 074 cells to 1 298 in 19 remeshes, against 1 600-1 950 with
+    each cell's own)."""
     d = corners.shape[2]
     flat = corners.reshape(-1, d)
     nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
@@ -310,7 +315,8 @@ def _size_field(corners, sizes, simplices):
     np.add.at(total, inverse, np.repeat(sizes, corners.shape[1]))
     np.add.at(count, inverse, 1.0)
     at_node = total / count
-    at_corner = at_node[inverse].reshape(corners.shape[:2])
+    at_corner = (np.repeat(sizes[:, None], corners.shape[1], axis=1) if d == 3
+                 else at_node[inverse].reshape(corners.shape[:2]))
     split = cell_simplices(simplices, d)
     cells = np.concatenate([corners[:, list(t)] for t in split])
     values = np.concatenate([at_corner[:, list(t)] for t in split])
