@@ -105,7 +105,7 @@ def chain(edges, tags):
     return Outline(np.roll(vertices, -shift, axis=0), np.roll(edge_tags, -shift))
 
 
-def initial_sizes(corners, initial, simplices):
+def initial_sizes(initial, simplices):
     """Each cell's element size as built, from its corners at the start (n, k, d): √A of a
     quadrilateral, the side of the equilateral triangle of its area, the edge of the regular
     tetrahedron of its volume, (6√2 V)^(1/3)."""

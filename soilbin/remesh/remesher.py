@@ -96,10 +96,14 @@ class Remeshing:
         self.reports = []   # this run's (not those before a resume)
         self.count = 0      # remeshes since the start, a resumed run's before it included
         self._last = 0      # the step of the last remesh
-        #: Rank 0: each cell's element size as the scene's mesh had it where the cell's soil
-        #: was (by input cell number; None until the first remesh, which reads the built
-        #: mesh's cells). Carried from mesh to mesh, so that sizes do not drift by remeshing.
-        self._sizes = None
+        #: Rank 0: the scene's mesh as built, its cells' corners (n, k, d) and element sizes
+        #: (None until the first remesh, which reads them off the mesh it remeshes): a cell
+        #: of any later mesh takes the size of the built cell where its soil started, so
+        #: that sizes do not drift by remeshing (carried from mesh to mesh instead, sampled
+        #: at each new mesh's cell centres, they coarsened the tine's tetrahedra by 30% in
+        #: 28 remeshes).
+        self._built = None
+        self._built_cells = None   # the built mesh's OldCells, to find points in
 
     def due(self, record):
         """Whether to remesh after this converged step."""
@@ -179,7 +183,7 @@ class Remeshing:
         x = new_layout.gather(new_layout.by_cell(POINTS, _point_coordinates(new)))
         new_contact = _contact_points(new)
         if comm.rank == 0:
-            self._sizes = _transfer(state, target, samples, x, element, self._sizes)
+            _transfer(state, target, samples, x, element)
             if contact is not None:
                 _transfer_contact(state, target, contact, new_contact)
         target = comm.bcast(target, root=0)
@@ -195,12 +199,16 @@ class Remeshing:
         :class:`~.mesher.Sizes`) on rank 0, on the grid of :data:`GRAIN` (the old corners in
         ``state`` too, for the transfer); ``d``: the mesh's dimension."""
         corners = state["kinematics/mesh_x"][1][:, :, :d]
-        if self._sizes is None:
-            initial = corners - state["kinematics/total_displacement"][1][:, :, :d]
-            self._sizes = initial_sizes(corners, initial, simplices)
+        initial = corners - state["kinematics/total_displacement"][1][:, :, :d]
+        if self._built is None:
+            self._built = (initial, initial_sizes(initial, simplices))
+        if self._built_cells is None:
+            self._built_cells = OldCells(self._built[0], simplices)
+        _, holding = self._built_cells.locate(initial.mean(axis=1))
+        built_sizes = self._built[1][self._built_cells.parent[holding]]
         grain = GRAIN * np.abs(corners).max()
         corners = state["kinematics/mesh_x"][1][:, :, :d] = _rounded(corners, grain)
-        sizes, at_node = _size_field(corners, self._sizes, simplices)
+        sizes, at_node = _size_field(corners, built_sizes, simplices)
         sizes = dataclasses.replace(sizes, values=_rounded(sizes.values, grain))
         if d == 3:
             return boundary.on_grid(grain), sizes
@@ -215,15 +223,17 @@ class Remeshing:
     def state(self):
         """What a checkpoint keeps of the remeshing (rank 0's arrays): name -> array."""
         state = {"last": np.asarray(self._last), "count": np.asarray(self.count)}
-        if self._sizes is not None:
-            state["sizes"] = self._sizes
+        if self._built is not None:
+            state["built_corners"], state["built_sizes"] = self._built
         return state
 
     def restore(self, state, mesh_file, layout):
         """Back to a checkpoint's :meth:`state`, on the mesh of ``mesh_file`` (None: the
         scene's) with its ``layout`` as made."""
         self._last, self.count = int(state["last"]), int(state["count"])
-        self._sizes = state.get("sizes")
+        self._built = ((state["built_corners"], state["built_sizes"])
+                       if "built_corners" in state else None)
+        self._built_cells = None
         self.mesh_file, self.layout = mesh_file, layout
 
 
@@ -249,11 +259,10 @@ def _equilibrated(problem):
     return NewtonResult(iterations, (first, result.residuals[-1]))
 
 
-def _transfer(state, target, samples, points, element, sizes):
+def _transfer(state, target, samples, points, element):
     """Fill ``target`` (the new problem's gathered state) from ``state`` (the old one's), on
     rank 0: ``samples`` (n_old, q, d) are the old quadrature points, ``points`` (n_new, q, d)
-    the new ones. Returns the new cells' sizes: ``sizes`` (of the old cells) of the old cell
-    each new cell's centre lies in."""
+    the new ones."""
     d = samples.shape[2]
     old = OldCells(state["kinematics/mesh_x"][1][:, :, :d], element.simplex)
     at_points = old.locate(points.reshape(-1, d))
@@ -268,8 +277,6 @@ def _transfer(state, target, samples, points, element, sizes):
     total = state["kinematics/total_displacement"][1]
     moved = old.at_nodes(total, at_nodes)
     target["kinematics/total_displacement"] = (NODES, moved.reshape(new_corners.shape))
-    _, holding = old.locate(new_corners[:, :, :d].mean(axis=1))
-    return sizes[old.parent[holding]]
 
 
 def _transfer_contact(state, target, old, new):
@@ -304,10 +311,8 @@ def _size_field(corners, sizes, simplices):
     """(:class:`~.mesher.Sizes` over the old cells, each corner the mean initial size of the
     cells around it, in 3D each tetrahedron its own; (the old nodes, the mean at each)).
 
-    Tetrahedra keep their own sizes: the mean at the nodes smooths the graded field each
-    time, and gmsh's tetrahedra coarsened by 2-8% a remesh (the tine from a STEP file,
-    remeshed every 2 steps: 2 074 cells to 1 298 in 19 remeshes, against 1 600-1 950 with
-    each cell's own)."""
+    Tetrahedra keep their own sizes: at the mean of the nodes gmsh's tetrahedra came out
+    coarser by 2-8% a remesh (the tine from a STEP file, remeshed every 2 steps)."""
     d = corners.shape[2]
     flat = corners.reshape(-1, d)
     nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
