@@ -3,9 +3,11 @@ transfer of the state to the new mesh, and a run that remeshes and resumes."""
 import csv
 from xml.etree import ElementTree
 
+import gmsh
 import meshio
 import numpy as np
 import pytest
+from dolfinx.cpp.mesh import entities_to_geometry
 
 from conftest import SCENES
 from soilbin.app.run import run_scene
@@ -246,6 +248,71 @@ def test_a_remeshed_soil_against_a_rough_wall_keeps_its_contact(tmp_path):
                                                                 rel=0.04)
     assert summary["passive_coefficient"] == pytest.approx(never["passive_coefficient"],
                                                            rel=0.01)
+
+
+def the_same_mesh(monkeypatch):
+    """Make the remesher "remesh" a three-dimensional soil onto its own mesh as it stands:
+    the state's transfer alone, without a new discretisation."""
+    from soilbin.meshes.tagged import distribute
+    from soilbin.remesh import remesher
+    old = {}
+    transferred = remesher.Remeshing._transferred
+
+    def keeping_the_old_mesh(self, problem, step):
+        old["tagged"] = problem.tagged
+        return transferred(self, problem, step)
+
+    def same_mesh(comm, surface, sizes, regions, boundaries, path):
+        tagged = old["tagged"]
+        mesh, facets = tagged.mesh, tagged.facet_tags
+        x, cells = mesh.geometry.x, mesh.geometry.dofmap.array.reshape(-1, 4)
+        triangles = entities_to_geometry(mesh._mesh, 2, facets.indices, False)[:, :3]
+
+        def model():
+            gmsh.model.add("same")
+            soil = gmsh.model.addDiscreteEntity(3)
+            gmsh.model.mesh.addNodes(3, soil, np.arange(1, len(x) + 1), x.ravel())
+            gmsh.model.mesh.addElementsByType(soil, 4, np.arange(1, len(cells) + 1),
+                                              (cells + 1).ravel())
+            gmsh.model.addPhysicalGroup(3, [soil], *regions.values())
+            first = len(cells) + 1
+            for tag in np.unique(facets.values):
+                mine = triangles[facets.values == tag] + 1
+                face = gmsh.model.addDiscreteEntity(2)
+                gmsh.model.mesh.addElementsByType(face, 2, np.arange(first, first + len(mine)),
+                                                  mine.ravel())
+                first += len(mine)
+                gmsh.model.addPhysicalGroup(2, [face], int(tag))
+            return regions, dict(boundaries)
+        return distribute(comm, "the same mesh", model, dimension=3)
+    monkeypatch.setattr(remesher.Remeshing, "_transferred", keeping_the_old_mesh)
+    monkeypatch.setattr(remesher, "mesh_surface", same_mesh)
+
+
+@pytest.mark.slow
+def test_remeshing_onto_the_same_mesh_changes_nothing(tmp_path, monkeypatch):
+    """The tine from a STEP file in large deformation (tet10, modified cap, the tool's
+    interface), "remeshed" onto its own mesh after each of its two steps: the stress and
+    history at the points and the contact state move over unchanged (to the fit's round-off
+    and the grid of the remesher's rounding), so the soil stays in equilibrium and the draft
+    is the same: what a real remesh changes (5-15% of the draft on this mesh) is the new
+    mesh's."""
+    the_same_mesh(monkeypatch)
+    scene = load_scene(SCENES / "tine-2in-cad.toml", [
+        "analysis.element=tet10", "analysis.large_deformation=true",
+        "loading.control=displacement", "loading.magnitude=0.01", "loading.steps=2",
+        "loading.first_cuts=0", "loading.max_cuts=0", "loading.until_collapse=false",
+        "output.at=[]", "output.fields=[]", "mesh.element_size=1.5", "mesh.growth=1.8",
+        "remesh.every=1"])
+    summary = run_scene(scene, tmp_path)
+    assert summary["status"] == "complete" and summary["remeshes"] == 2
+    with open(tmp_path / "remeshes.csv") as f:
+        for report in csv.DictReader(f):
+            assert int(report["cells_after"]) == int(report["cells_before"])
+            assert float(report["residual_transferred"]) < 1e-5        # of the force scale
+            assert int(report["newton_iterations"]) <= 2
+            assert float(report["force_after"]) == pytest.approx(float(report["force_before"]),
+                                                                rel=1e-3)
 
 
 def test_each_mesh_is_a_grid_of_fields_xdmf_and_a_gmsh_file(tmp_path):
