@@ -1,7 +1,8 @@
 """Where the tine's assembly goes, and what the C compiler's flags change: per Jacobian, the
 FFCx cell kernel alone (called cell by cell over the packed coefficients and coordinates)
 and the insertion into PETSc's matrix (the rest of the assembly); the residual vector; and
-the problem's set-up on an empty form cache (its forms compiled), for each set of flags given to FFCx's C code.
+the problem's set-up on an empty form cache (its forms compiled), for each set of flags
+given to FFCx's C code.
 
 Each set of flags runs in its own process with its own empty form cache (a DOLFINx
 ``dolfinx_jit_parameters.json`` in a temporary XDG_CONFIG_HOME), on the default tine's mesh

@@ -154,7 +154,8 @@ def test_a_geo_script_is_a_tool_file_as_a_step_file_is(tmp_path):
     assert cells[1] == pytest.approx(cells[0], rel=0.2)
     assert set(meshes[1].regions) == {"soil"}
     scene = load_scene(CAD, [f"mesh.tool_file={tmp_path / 'built-in.geo'}", "mesh.tool_scale=1.0"])
-    with pytest.raises(InputError, match=r'built-in kernel; begin it with SetFactory\("OpenCASCADE"\)'):
+    with pytest.raises(InputError,
+                       match=r'built-in kernel; begin it with SetFactory\("OpenCASCADE"\)'):
         scene_mesh(scene, COMM)
 
 

@@ -103,12 +103,16 @@ def box_surface(tags):
 
 def test_the_surface_is_cut_into_patches_at_folds_and_at_group_borders():
     corners, tags = box_surface([1, 2, 3, 4, 5, 6])
-    assert len(np.unique(Surface.of(corners, tags).patches(np.radians(40.0)))) == 6
-    assert len(np.unique(Surface.of(corners, np.ones(12, dtype=int)).patches(np.radians(40.0)))) == 6
-    assert len(np.unique(Surface.of(corners, np.ones(12, dtype=int)).patches(np.radians(100.0)))) == 1
+    one_group = np.ones(12, dtype=int)
+
+    def patches(tags, crease):
+        return len(np.unique(Surface.of(corners, tags).patches(np.radians(crease))))
+    assert patches(tags, 40.0) == 6
+    assert patches(one_group, 40.0) == 6
+    assert patches(one_group, 100.0) == 1
     split = tags.copy()
     split[11] = 7   # one triangle of the top face in a group of its own: a border on a flat face
-    assert len(np.unique(Surface.of(corners, split).patches(np.radians(40.0)))) == 7
+    assert patches(split, 40.0) == 7
     with pytest.raises(OutlineError, match="do not close"):
         Surface.of(corners[:-1], tags[:-1])
 
@@ -116,7 +120,8 @@ def test_the_surface_is_cut_into_patches_at_folds_and_at_group_borders():
 def test_a_remeshed_homogeneous_block_keeps_its_state_exactly_in_3d(tmp_path):
     """The Drucker–Prager block in uniaxial compression on tetrahedra, in large deformation,
     remeshed twice: a uniform state is moved over exactly (no Newton iteration to
-    re-equilibrate), and the block carries its collapse stress 2c cos φ / (1 − sin φ) to the end."""
+    re-equilibrate), and the block carries its collapse stress 2c cos φ / (1 − sin φ) to the
+    end."""
     scene = load_scene(SCENES / "block-drucker-prager.toml", BLOCK_3D)
     summary = run_scene(scene, tmp_path)
     assert summary["status"] == "complete" and summary["remeshes"] == 2

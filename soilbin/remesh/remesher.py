@@ -309,19 +309,20 @@ def _contact_points(problem):
 
 def _size_field(corners, sizes, simplices):
     """(:class:`~.mesher.Sizes` over the old cells, each corner the mean initial size of the
-    cells around it, in 3D each tetrahedron its own; (the old nodes, the mean at each)).
+    cells around it, in 3D each tetrahedron its own; (the old nodes, the mean at each), None
+    in 3D).
 
     Tetrahedra keep their own sizes: at the mean of the nodes gmsh's tetrahedra came out
     coarser by 2-8% a remesh (the tine from a STEP file, remeshed every 2 steps)."""
     d = corners.shape[2]
-    flat = corners.reshape(-1, d)
-    nodes, inverse = np.unique(flat, axis=0, return_inverse=True)
+    if d == 3:
+        return Sizes(corners, np.repeat(sizes[:, None], corners.shape[1], axis=1)), None
+    nodes, inverse = np.unique(corners.reshape(-1, d), axis=0, return_inverse=True)
     total, count = np.zeros(len(nodes)), np.zeros(len(nodes))
     np.add.at(total, inverse, np.repeat(sizes, corners.shape[1]))
     np.add.at(count, inverse, 1.0)
     at_node = total / count
-    at_corner = (np.repeat(sizes[:, None], corners.shape[1], axis=1) if d == 3
-                 else at_node[inverse].reshape(corners.shape[:2]))
+    at_corner = at_node[inverse].reshape(corners.shape[:2])
     split = cell_simplices(simplices, d)
     cells = np.concatenate([corners[:, list(t)] for t in split])
     values = np.concatenate([at_corner[:, list(t)] for t in split])

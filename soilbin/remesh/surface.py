@@ -27,13 +27,16 @@ class Surface:
         points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
         triangles = index.reshape(-1, 3)
         order = np.lexsort(np.sort(triangles, axis=1).T[::-1])
-        triangles, tags = triangles[order], np.asarray(tags)[order]
-        edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-        _, count = np.unique(edges, axis=0, return_counts=True)
+        surface = cls(points, triangles[order], np.asarray(tags)[order])
+        _, count = np.unique(surface.edges(), axis=0, return_counts=True)
         if (count != 2).any():
             raise OutlineError("the tagged boundary facets do not close the soil (a boundary "
                                "facet in no facet group)")
-        return cls(points, triangles, tags)
+        return surface
+
+    def edges(self):
+        """The three edges of each triangle in turn, (3 m, 2) point pairs, each pair sorted."""
+        return np.sort(self.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
 
     def patches(self, crease):
         """The patch of each triangle (m,): the surface cut along the borders of its facet
@@ -41,14 +44,14 @@ class Surface:
         a, b, c = (self.points[self.triangles[:, k]] for k in range(3))
         normal = np.cross(b - a, c - a)
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        edges = np.sort(self.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
         owner = np.repeat(np.arange(len(self.triangles)), 3)
-        order = np.lexsort(edges.T[::-1])
+        order = np.lexsort(self.edges().T[::-1])
         first, second = owner[order[0::2]], owner[order[1::2]]   # each edge's two triangles
         smooth = ((self.tags[first] == self.tags[second])
                   & (np.einsum("ij,ij->i", normal[first], normal[second]) > np.cos(crease)))
         m = len(self.triangles)
-        joined = coo_matrix((np.ones(smooth.sum()), (first[smooth], second[smooth])), shape=(m, m))
+        joined = coo_matrix((np.ones(smooth.sum()), (first[smooth], second[smooth])),
+                            shape=(m, m))
         return connected_components(joined, directed=False)[1]
 
     def on_grid(self, grain):

@@ -4,16 +4,16 @@ Quadrature data: each old cell's values at its points become one linear polynomi
 current coordinates, fitted by least squares through them (three terms through the 2 x 2
 Gauss points of a quadrilateral, the three of a quadratic triangle's rule, four through the
 four points of a quadratic tetrahedron's; the one point of a reduced rule gives the cell's
-value); a new point
-takes the polynomial of the old cell it lies in, evaluated there: the cell-wise recovery of the
-RITSS method (Hu and Randolph 1998, "A practical numerical approach for large deformation
-problems in soil", IJNAMG 22, 327-350), which keeps a field's gradient inside a cell and
-smooths nothing across cells. Nodal data (the total displacement): linear interpolation of the
-old nodes' values over the old cells cut into simplices (exact at the old nodes, continuous).
-A point is found in the old cells cut into simplices (triangles; tetrahedra are their own:
-affine, so no inverse map of a distorted quadrilateral can fail); a point that no old cell
-holds (round-off at the boundary) takes its nearest cell. Fields that a return map keeps on a yield surface are not kept there by the fit:
-the re-equilibration (:mod:`.remesher`) returns them.
+value); a new point takes the polynomial of the old cell it lies in, evaluated there: the
+cell-wise recovery of the RITSS method (Hu and Randolph 1998, "A practical numerical approach
+for large deformation problems in soil", IJNAMG 22, 327-350), which keeps a field's gradient
+inside a cell and smooths nothing across cells. Nodal data (the total displacement): linear
+interpolation of the old nodes' values over the old cells cut into simplices (exact at the
+old nodes, continuous). A point is found in the old cells cut into simplices (triangles;
+tetrahedra are their own: affine, so no inverse map of a distorted quadrilateral can fail); a
+point that no old cell holds (round-off at the boundary) takes its nearest cell. Fields that a
+return map keeps on a yield surface are not kept there by the fit: the re-equilibration
+(:mod:`.remesher`) returns them.
 """
 import numpy as np
 import ufl
