@@ -21,6 +21,23 @@ def curve(*overrides):
     return problem, np.array([(r.load_factor, r.force) for r in result.steps])
 
 
+def test_the_symmetry_check_is_numpys_allclose():
+    """The compiled check of the tangents' symmetry answers as np.allclose(B, B.T) with the
+    same tolerances, block by block: symmetric, perturbed within and beyond them."""
+    from mpi4py import MPI
+    rng = np.random.default_rng(3)
+    blocks = rng.standard_normal((50, 6, 6))
+    blocks += blocks.transpose(0, 2, 1)
+    scale = np.abs(blocks).max()
+    for size in (0.0, 1e-13, 1e-10 * scale, 1e-8 * scale, 1e-3):
+        for b in range(len(blocks)):
+            bent = blocks.copy()
+            bent[b, 1, 4] += size * (1.0 + b)
+            expected = np.allclose(bent, bent.transpose(0, 2, 1), rtol=1e-9,
+                                   atol=1e-12 * np.abs(bent).max())
+            assert linear_solver.all_symmetric(bent, MPI.COMM_SELF) == expected, (size, b)
+
+
 def test_every_linear_solver_gives_the_same_curve(monkeypatch):
     """Each choice follows LU's curve; ``auto`` takes LDLT here and, above BLR_DOFS unknowns
     (the threshold lowered so that the footing passes it), the block low-rank LU."""

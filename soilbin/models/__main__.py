@@ -1,10 +1,11 @@
 """``python -m soilbin.models``: compile every model's kernels into numba's disk cache (one
-update of each conformance sample), so that the first run of a scene does not wait for
-the compiler. ``make setup`` runs it after the sources change."""
+update of each conformance sample, and the symmetry check of its tangent), so that the
+first run of a scene does not wait for the compiler. ``make setup`` runs it after the sources change."""
 import time
 
 from ..params import from_table
 from . import MODELS
+from .base import blocks_symmetric
 
 
 def compile_kernels():
@@ -13,7 +14,9 @@ def compile_kernels():
     for name, cls in MODELS.items():
         for sample in cls.conformance_samples():
             model = from_table(cls, sample.table, name)
-            model.update(sample.deps[None], sample.state(model), guess=sample.state(model))
+            _, tangent, _ = model.update(sample.deps[None], sample.state(model),
+                                         guess=sample.state(model))
+            blocks_symmetric(tangent, 1e-9, 0.0)   # the linear solver's check
     return time.perf_counter() - start
 
 

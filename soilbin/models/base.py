@@ -51,6 +51,24 @@ def count_nonfinite(sigma, tangent):
     return failed
 
 
+@kernel
+def blocks_symmetric(blocks, rtol, atol):
+    """Whether every (k, k) block of ``blocks`` (n, k, k) is symmetric to the test of
+    ``np.allclose(B, B.T, rtol, atol * max|B|)``, stopping at the first that is not (a
+    non-associated or slipping point's tangent is met early)."""
+    scale = 0.0
+    for value in blocks.ravel():
+        scale = max(scale, abs(value))
+    atol = atol * scale
+    for b in range(blocks.shape[0]):
+        for i in range(blocks.shape[1]):
+            for j in range(i + 1, blocks.shape[2]):
+                upper, lower = blocks[b, i, j], blocks[b, j, i]
+                if not abs(upper - lower) <= atol + rtol * min(abs(upper), abs(lower)):
+                    return False
+    return True
+
+
 @dataclasses.dataclass(frozen=True)
 class Sample:
     """One point of a model's conformance suite: from the committed ``stress``

@@ -39,6 +39,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from ..errors import ConvergenceError, InputError
+from ..models.base import blocks_symmetric
 from ..records.scene import LinearSolverKind
 from .condensation import CellCondensation, Uncondensed
 
@@ -61,8 +62,7 @@ BLR_TOLERANCE = 1e-4
 def all_symmetric(blocks, comm):
     """Whether every (n, k, k) block on every rank is symmetric to round-off (the same
     answer on all ranks: each takes the same factorisation)."""
-    scale = np.abs(blocks).max(initial=0.0)
-    local = np.allclose(blocks, blocks.transpose(0, 2, 1), rtol=1e-9, atol=1e-12 * scale)
+    local = blocks_symmetric(np.ascontiguousarray(blocks), 1e-9, 1e-12)
     return comm.allreduce(bool(local), op=MPI.LAND)
 
 
