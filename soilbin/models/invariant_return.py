@@ -253,12 +253,24 @@ def row_less(row, factor, pivot):
 
 
 @kernel
+def over(value, pivot):
+    """value / pivot; zero for a zero pivot (the unknown of a singular column)."""
+    return value / pivot if pivot != 0.0 else 0.0
+
+
+@kernel
+def eliminated(row, pivot, k):
+    """row less the multiple of the pivot row that zeroes its entry k."""
+    return row_less(row, over(row[k], pivot[k]), pivot)
+
+
+@kernel
 def back_substitute(a0, a1, a2, a3, b):
     """x of the upper-triangular rows a0 .. a3 and the right-hand side b."""
-    x3 = b[3] / a3[3]
-    x2 = (b[2] - a2[3] * x3) / a2[2]
-    x1 = (b[1] - a1[2] * x2 - a1[3] * x3) / a1[1]
-    x0 = (b[0] - a0[1] * x1 - a0[2] * x2 - a0[3] * x3) / a0[0]
+    x3 = over(b[3], a3[3])
+    x2 = over(b[2] - a2[3] * x3, a2[2])
+    x1 = over(b[1] - a1[2] * x2 - a1[3] * x3, a1[1])
+    x0 = over(b[0] - a0[1] * x1 - a0[2] * x2 - a0[3] * x3, a0[0])
     return x0, x1, x2, x3
 
 
@@ -266,7 +278,8 @@ def back_substitute(a0, a1, a2, a3, b):
 def dense_solve(jac, b0, b1):
     """(x0, x1) with jac x0 = b0 and jac x1 = b1 (jac: 4 rows of 4): Gaussian elimination
     with partial pivoting (column by column, the largest entry of the rows below swapped
-    up), on rows [jac | b0 | b1]; the pseudo-inverse if a pivot is zero."""
+    up), on rows [jac | b0 | b1]. A zero pivot (a singular column) sets its unknown to zero,
+    as MUMPS does with a null pivot."""
     a0 = (jac[0][0], jac[0][1], jac[0][2], jac[0][3], b0[0], b1[0])
     a1 = (jac[1][0], jac[1][1], jac[1][2], jac[1][3], b0[1], b1[1])
     a2 = (jac[2][0], jac[2][1], jac[2][2], jac[2][3], b0[2], b1[2])
@@ -277,46 +290,17 @@ def dense_solve(jac, b0, b1):
         a0, a2 = a2, a0
     if abs(a3[0]) > abs(a0[0]):
         a0, a3 = a3, a0
-    if a0[0] == 0.0:
-        return pinv_solve(jac, b0, b1)
-    a1, a2, a3 = (row_less(a1, a1[0] / a0[0], a0), row_less(a2, a2[0] / a0[0], a0),
-                  row_less(a3, a3[0] / a0[0], a0))
+    a1, a2, a3 = eliminated(a1, a0, 0), eliminated(a2, a0, 0), eliminated(a3, a0, 0)
     if abs(a2[1]) > abs(a1[1]):
         a1, a2 = a2, a1
     if abs(a3[1]) > abs(a1[1]):
         a1, a3 = a3, a1
-    if a1[1] == 0.0:
-        return pinv_solve(jac, b0, b1)
-    a2, a3 = row_less(a2, a2[1] / a1[1], a1), row_less(a3, a3[1] / a1[1], a1)
+    a2, a3 = eliminated(a2, a1, 1), eliminated(a3, a1, 1)
     if abs(a3[2]) > abs(a2[2]):
         a2, a3 = a3, a2
-    if a2[2] == 0.0:
-        return pinv_solve(jac, b0, b1)
-    a3 = row_less(a3, a3[2] / a2[2], a2)
-    if a3[3] == 0.0:
-        return pinv_solve(jac, b0, b1)
+    a3 = eliminated(a3, a2, 2)
     return (back_substitute(a0, a1, a2, a3, (a0[4], a1[4], a2[4], a3[4])),
             back_substitute(a0, a1, a2, a3, (a0[5], a1[5], a2[5], a3[5])))
-
-
-@kernel
-def pinv_solve(jac, b0, b1):
-    """:func:`dense_solve` by the pseudo-inverse."""
-    m = np.empty((4, 4))
-    for i in range(4):
-        for j in range(4):
-            m[i, j] = jac[i][j]
-    inverse = np.linalg.pinv(m)
-    return matvec(inverse, b0), matvec(inverse, b1)
-
-
-@kernel
-def matvec(m, b):
-    """m b, m (4, 4)."""
-    return (m[0, 0] * b[0] + m[0, 1] * b[1] + m[0, 2] * b[2] + m[0, 3] * b[3],
-            m[1, 0] * b[0] + m[1, 1] * b[1] + m[1, 2] * b[2] + m[1, 3] * b[3],
-            m[2, 0] * b[0] + m[2, 1] * b[1] + m[2, 2] * b[2] + m[2, 3] * b[3],
-            m[3, 0] * b[0] + m[3, 1] * b[1] + m[3, 2] * b[2] + m[3, 3] * b[3])
 
 
 ZERO4 = (0.0, 0.0, 0.0, 0.0)
