@@ -117,6 +117,67 @@ def test_the_surface_is_cut_into_patches_at_folds_and_at_group_borders():
         Surface.of(corners[:-1], tags[:-1])
 
 
+def test_the_patches_borders_are_the_cubes_edges_and_a_closed_border_gets_a_corner():
+    corners, tags = box_surface([1, 2, 3, 4, 5, 6])
+    surface = Surface.of(corners, tags)
+    borders = surface.borders(surface.patches(np.radians(40.0)))
+    assert len(borders.corners) == 8 and len(borders.curves) == 12
+    assert [len(b) for b in borders.bounding] == [4] * 6
+    ends = {tuple(sorted((c[0], c[-1]))) for c in borders.curves}
+    lengths = [np.linalg.norm(np.subtract(*surface.points[list(e)])) for e in ends]
+    assert np.allclose(lengths, 1.0)      # the twelve edges of the cube, from corner to corner
+    # a square in the middle of the top face a patch of its own: its border meets no other
+    fine = Surface.of(*refined_box_surface(4))
+    patch_of = fine.patches(np.radians(40.0))
+    top = patch_of[np.argmax(fine.points[fine.triangles].mean(axis=1)[:, 2])]
+    centre = np.abs(fine.points[fine.triangles].mean(axis=1)[:, :2] - 0.5).max(axis=1) < 0.25
+    patch_of[centre & (patch_of == top)] = patch_of.max() + 1
+    borders = fine.borders(patch_of)
+    assert len(borders.curves) == 13 and len(borders.corners) == 9
+    loop, = (c for c in borders.curves if c[0] == c[-1])
+    assert len(loop) == 9    # the square's eight edges, closed at its least point
+
+
+def refined_box_surface(n):
+    """The unit cube's surface, each face an n x n grid of squares cut in two triangles,
+    tagged by face as :func:`box_surface`."""
+    corners, tags = [], []
+    grid = np.linspace(0.0, 1.0, n + 1)
+    for face, (axis, side) in enumerate((a, s) for a in range(3) for s in (0.0, 1.0)):
+        u, v = [a for a in range(3) if a != axis]
+        for i in range(n):
+            for j in range(n):
+                square = np.zeros((4, 3))
+                square[:, axis] = side
+                square[:, u] = grid[[i, i + 1, i + 1, i]]
+                square[:, v] = grid[[j, j, j + 1, j + 1]]
+                corners += [square[[0, 1, 2]], square[[0, 2, 3]]]
+                tags += [face + 1] * 2
+    return np.array(corners), np.array(tags)
+
+
+def test_a_surface_is_meshed_the_same_way_every_time(tmp_path):
+    """The mesh of a surface depends on the surface alone, not on what the process did before
+    (gmsh's own createTopology numbered the curves in an order that changed from run to run,
+    and the tetrahedra with it)."""
+    from mpi4py import MPI
+    from soilbin.remesh.mesher import Sizes, mesh_surface
+    surface = Surface.of(*refined_box_surface(3))
+    kuhn = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]]
+    cube = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float)
+    sizes = Sizes(cube[kuhn], np.full((6, 4), 0.3))
+    meshes = []
+    for attempt in range(3):
+        junk = [np.empty(1000 + 997 * attempt * k) for k in range(50)]   # another heap
+        mesh_surface(MPI.COMM_SELF, surface, sizes, {"soil": 1},
+                     {f"face{k}": k for k in range(1, 7)}, tmp_path / f"{attempt}.msh")
+        del junk
+        mesh = meshio.read(tmp_path / f"{attempt}.msh")
+        meshes.append((mesh.points, mesh.cells_dict["tetra"]))
+    for points, cells in meshes[1:]:
+        assert np.array_equal(points, meshes[0][0]) and np.array_equal(cells, meshes[0][1])
+
+
 def test_a_remeshed_homogeneous_block_keeps_its_state_exactly_in_3d(tmp_path):
     """The Drucker–Prager block in uniaxial compression on tetrahedra, in large deformation,
     remeshed twice: a uniform state is moved over exactly (no Newton iteration to

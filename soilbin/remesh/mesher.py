@@ -13,11 +13,14 @@ compound's elements for each of its curves, and DOLFINx's reader crashes on the 
 
 Three-dimensional (:func:`mesh_surface`, tetrahedra): the boundary's triangles become discrete
 surfaces, one per patch of one facet group between folds of more than :data:`CREASE` (the
-tool's faces, the bin's sides), which gmsh maps onto a plane each (``createGeometry``: a patch
-must be a topological disc) and meshes afresh (MeshAdapt: on the mapped patches of the tine's
-soil Frontal-Delaunay leaves hundreds of inverted triangles) with the volume they close, at
-the sizes of the background field. gmsh's own ``classifySurfaces`` does not cut at a group's
-border where the boundary is flat (the footing beside the free surface)."""
+tool's faces, the bin's sides), with the curves where they meet found here
+(:meth:`~.surface.Surface.borders`: gmsh's ``createTopology`` numbers them in an order that
+changes from run to run, and the mesh changes with it), which gmsh maps onto a plane each
+(``createGeometry``: a patch must be a topological disc) and meshes afresh (MeshAdapt: on
+the mapped patches of the tine's soil Frontal-Delaunay leaves hundreds of inverted
+triangles) with the volume they close, at the sizes of the background field. gmsh's own
+``classifySurfaces`` does not cut at a group's border where the boundary is flat (the footing
+beside the free surface)."""
 import dataclasses
 import math
 
@@ -82,21 +85,8 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path):
     ``regions``, ``boundaries`` as :func:`mesh_outline`'s."""
     def model():
         gmsh.model.add("remesh")
-        mesh = gmsh.model.mesh
-        patch_of = surface.patches(CREASE)
-        patches = [gmsh.model.addDiscreteEntity(2) for _ in range(patch_of.max() + 1)]
-        mesh.addNodes(2, patches[0], np.arange(1, len(surface.points) + 1),
-                      surface.points.ravel())
-        first, groups = 1, {}
-        for patch, entity in enumerate(patches):
-            mine = patch_of == patch
-            triangles = surface.triangles[mine] + 1
-            mesh.addElementsByType(entity, 2, np.arange(first, first + len(triangles)),
-                                   triangles.ravel())
-            first += len(triangles)
-            groups[entity] = surface.tags[mine][0]
-        mesh.createTopology()
-        mesh.createGeometry()
+        groups = _discrete_model(surface)
+        gmsh.model.mesh.createGeometry()
         faces = [entity for _, entity in gmsh.model.getEntities(2)]
         volume = gmsh.model.geo.addVolume([gmsh.model.geo.addSurfaceLoop(faces)])
         gmsh.model.geo.synchronize()
@@ -115,6 +105,39 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path):
         _write(path)
         return regions, dict(boundaries)
     return distribute(comm, "remesh", model, dimension=3)
+
+
+def _discrete_model(surface):
+    """The surface as gmsh's discrete entities, numbered in the order of its own
+    :meth:`~.surface.Surface.borders` (gmsh's ``createTopology`` numbers them differently from
+    run to run): a point per corner, a curve per border, a surface per patch, each holding
+    its nodes and elements. Returns each surface entity's facet group tag."""
+    model, mesh = gmsh.model, gmsh.model.mesh
+    patch_of = surface.patches(CREASE)
+    borders = surface.borders(patch_of)
+    corner = {int(c): model.addDiscreteEntity(0) for c in borders.corners}
+    curves = [model.addDiscreteEntity(1, -1, [corner[c[0]], corner[c[-1]]])
+              for c in borders.curves]
+    patches = [model.addDiscreteEntity(2, -1, [curves[k] for k in bounding])
+               for bounding in borders.bounding]
+    # each node on the entity of least dimension that holds it
+    home = np.full(len(surface.points), -1)
+    home[surface.triangles.ravel()] = np.repeat(patch_of, 3)
+    for c, entity in corner.items():
+        mesh.addNodes(0, entity, [c + 1], surface.points[c])
+        home[c] = -2
+    for chain, entity in zip(borders.curves, curves):
+        inner = np.array(chain[1:-1], dtype=int)
+        mesh.addNodes(1, entity, inner + 1, surface.points[inner].ravel())
+        home[inner] = -2
+        mesh.addElementsByType(entity, 1, [], np.column_stack([chain[:-1], chain[1:]]).ravel() + 1)
+    for patch, entity in enumerate(patches):
+        nodes = np.flatnonzero(home == patch)
+        mesh.addNodes(2, entity, nodes + 1, surface.points[nodes].ravel())
+    for patch, entity in enumerate(patches):
+        triangles = surface.triangles[patch_of == patch] + 1
+        mesh.addElementsByType(entity, 2, [], triangles.ravel())
+    return {entity: surface.tags[patch_of == patch][0] for patch, entity in enumerate(patches)}
 
 
 def read_mesh(comm, path, regions, boundaries, dimension=2):

@@ -54,9 +54,72 @@ class Surface:
                             shape=(m, m))
         return connected_components(joined, directed=False)[1]
 
+    def borders(self, patch_of):
+        """The :class:`Borders` of the patches ``patch_of`` (m,), found in an order of their
+        own: gmsh's ``createTopology`` numbers the curves it finds in an order that changes
+        from run to run (the process's memory), and with it the mesh gmsh makes."""
+        owner = np.repeat(np.arange(len(self.triangles)), 3)
+        edges = self.edges()
+        order = np.lexsort(edges.T[::-1])
+        first, second = order[0::2], order[1::2]   # each edge's two rows
+        pair = np.sort(np.column_stack([patch_of[owner[first]], patch_of[owner[second]]]),
+                       axis=1)
+        border = pair[:, 0] != pair[:, 1]
+        edge, pair = edges[first[border]], pair[border]
+        # a corner where the borders of more than one pair of patches meet, or where a border
+        # does not simply pass (it touches itself)
+        ends = edge.ravel()
+        pairs_at = {}
+        for point, key in zip(ends, np.repeat(pair, 2, axis=0).tolist()):
+            pairs_at.setdefault(int(point), []).append(tuple(key))
+        corners = {point for point, keys in pairs_at.items()
+                   if len(keys) != 2 or keys[0] != keys[1]}
+        curves, patches = [], []
+        for key in sorted(set(map(tuple, pair.tolist()))):
+            mine = edge[(pair == key).all(axis=1)].tolist()
+            next_to = {}
+            for a, b in mine:
+                next_to.setdefault(a, []).append(b)
+                next_to.setdefault(b, []).append(a)
+            unused = {tuple(sorted(e)) for e in mine}
+            starts = sorted(p for p in next_to if p in corners)
+            while unused:
+                if not starts:   # a closed border without a corner: its least point is one
+                    start = min(p for e in unused for p in e)
+                    corners.add(start)
+                    starts = [start]
+                chain = [starts[0]]
+                while True:
+                    step = [q for q in sorted(next_to[chain[-1]])
+                            if tuple(sorted((chain[-1], q))) in unused]
+                    if not step:
+                        break
+                    unused.discard(tuple(sorted((chain[-1], step[0]))))
+                    chain.append(step[0])
+                    if step[0] in corners:
+                        break
+                if len(chain) > 1:
+                    curves.append(chain)
+                    patches.append(key)
+                else:
+                    starts.pop(0)
+        bounding = [[k for k, key in enumerate(patches) if patch in key]
+                    for patch in range(patch_of.max() + 1)]
+        return Borders(np.array(sorted(corners), dtype=int), curves, bounding)
+
     def on_grid(self, grain):
         """The surface with its points rounded to a grid of ``grain``."""
         return Surface.of(np.round(self.points[self.triangles] / grain) * grain, self.tags)
+
+
+@dataclasses.dataclass(frozen=True)
+class Borders:
+    """Where a surface's patches meet: the ``corners`` (point numbers where borders meet, and
+    one on each closed border that meets none), the ``curves`` (chains of point numbers from
+    corner to corner, each between two patches) and the curves ``bounding`` each patch."""
+    corners: np.ndarray
+    curves: list
+    bounding: list
 
 
 def gather_surface(tagged):
