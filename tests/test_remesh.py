@@ -178,6 +178,32 @@ def test_a_surface_is_meshed_the_same_way_every_time(tmp_path):
         assert np.array_equal(points, meshes[0][0]) and np.array_equal(cells, meshes[0][1])
 
 
+def test_the_fine_cells_at_a_tool_go_with_it(tmp_path):
+    """A bar of tetrahedra built fine at the tool (x < 1) and coarse beyond, the tool moved 2
+    along x: a cell takes the least of the size built where its soil started and the size
+    built at the place that lay where the cell now lies relative to the tool."""
+    from soilbin.remesh.remesher import Remeshing
+    kuhn = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]]
+    unit = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float)
+    edges = np.array([0.0, 0.25, 0.5, 0.75, 1.0, 2.0, 3.0, 4.0])
+    corners = np.concatenate([unit[kuhn] * [b - a, 1.0, 1.0] + [a, 0.0, 0.0]
+                              for a, b in zip(edges[:-1], edges[1:])])
+    state = {"kinematics/mesh_x": (None, corners.copy()),
+             "kinematics/total_displacement": (None, np.zeros_like(corners))}
+    remeshing = Remeshing(load_scene(SCENES / "block-drucker-prager.toml", BLOCK_3D), tmp_path)
+    _, sizes = remeshing._mesher_input(state, Surface.of(*box_surface(np.arange(1, 7))), True,
+                                       3, np.array([2.0, 0.0, 0.0]))
+    size = sizes.values[:, 0]
+    centre = corners.mean(axis=1)[:, 0]
+    fine, coarse = size[centre < 0.25].max(), size[centre > 3.0].min()
+    assert fine == pytest.approx(np.cbrt(6.0 * np.sqrt(2.0) * 0.25 / 6.0), rel=1e-6)
+    assert coarse == pytest.approx(np.cbrt(6.0 * np.sqrt(2.0) / 6.0), rel=1e-6)
+    assert np.allclose(size[centre < 1.0], fine)                 # its own: x - 2 is no soil
+    now_at_tool = (centre > 2.0) & (centre < 3.0)
+    assert now_at_tool.sum() == 6 and np.allclose(size[now_at_tool], fine)
+    assert np.allclose(size[centre > 3.0], coarse)               # x - 2 was coarse as well
+
+
 def test_a_remeshed_homogeneous_block_keeps_its_state_exactly_in_3d(tmp_path):
     """The Drucker–Prager block in uniaxial compression on tetrahedra, in large deformation,
     remeshed twice: a uniform state is moved over exactly (no Newton iteration to

@@ -166,7 +166,7 @@ class Remeshing:
         sizes = None
         if comm.rank == 0:
             boundary, sizes = self._mesher_input(state, boundary, element.simplex,
-                                                 old.disc.dimension)
+                                                 old.disc.dimension, _tool_shift(old))
         mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
         groups = dict(tagged.regions), dict(tagged.boundaries)
         if planar:
@@ -194,18 +194,27 @@ class Remeshing:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
         return new, mesh_s
 
-    def _mesher_input(self, state, boundary, simplices, d):
+    def _mesher_input(self, state, boundary, simplices, d, tool_shift):
         """(the boundary: in 2D the outline sampled at the sizes, in 3D the surface; the
         :class:`~.mesher.Sizes`) on rank 0, on the grid of :data:`GRAIN` (the old corners in
-        ``state`` too, for the transfer); ``d``: the mesh's dimension."""
+        ``state`` too, for the transfer); ``d``: the mesh's dimension; ``tool_shift``: the
+        tool's displacement along the mesh's axes (None without a tool)."""
         corners = state["kinematics/mesh_x"][1][:, :, :d]
         initial = corners - state["kinematics/total_displacement"][1][:, :, :d]
         if self._built is None:
             self._built = (initial, initial_sizes(initial, simplices))
         if self._built_cells is None:
             self._built_cells = OldCells(self._built[0], simplices)
-        _, holding = self._built_cells.locate(initial.mean(axis=1))
-        built_sizes = self._built[1][self._built_cells.parent[holding]]
+        built_sizes = self._built[1][self._built_cells.parent[
+            self._built_cells.locate(initial.mean(axis=1))[1]]]
+        if tool_shift is not None:
+            # Around the tool where it now is, the sizes it was built with around it: at the
+            # place that lay where each cell now lies relative to the tool (none where that
+            # place was not soil), so that the fine cells at the tool go with it.
+            holding = self._built_cells.holding(corners.mean(axis=1) - tool_shift)[1]
+            inside = holding >= 0
+            built_sizes[inside] = np.minimum(
+                built_sizes[inside], self._built[1][self._built_cells.parent[holding[inside]]])
         grain = GRAIN * np.abs(corners).max()
         corners = state["kinematics/mesh_x"][1][:, :, :d] = _rounded(corners, grain)
         sizes, at_node = _size_field(corners, built_sizes, simplices)
@@ -295,6 +304,14 @@ def _transfer_contact(state, target, old, new):
     for name, (kind, _) in target.items():
         if kind == CONTACT:
             target[name] = (kind, state[name][1][rows])
+
+
+def _tool_shift(problem):
+    """The tool's rigid displacement along the mesh's axes (d,), None without a tool."""
+    if problem.tool is None:
+        return None
+    disc = problem.disc
+    return disc.to_world(np.eye(disc.dimension)) @ (problem.tool.travel * problem.tool.direction)
 
 
 def _contact_points(problem):

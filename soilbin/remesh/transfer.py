@@ -58,9 +58,9 @@ class OldCells:
         self._tree = geometry.BoundingBoxTree(self.mesh, dim)
         self._midpoints = None
 
-    def locate(self, points):
-        """(points as 3-vectors, the simplex of :attr:`mesh` holding each point (m, d)); the
-        nearest simplex where none does."""
+    def holding(self, points):
+        """(points as 3-vectors, the simplex of :attr:`mesh` holding each point (m, d), -1
+        where none does)."""
         x = np.column_stack([points, np.zeros((len(points), 3 - self._dim))])
         candidates = geometry.compute_collisions(self._tree, x)
         colliding = geometry.compute_colliding_cells(self.mesh, candidates, x)
@@ -68,12 +68,18 @@ class OldCells:
         found = offsets[1:] > offsets[:-1]
         cells = np.full(len(points), -1, dtype=np.int32)
         cells[found] = colliding.array[offsets[:-1][found]]
-        if not found.all():
+        return x, cells
+
+    def locate(self, points):
+        """As :meth:`holding`, but the nearest simplex where none holds the point."""
+        x, cells = self.holding(points)
+        missing = cells < 0
+        if missing.any():
             if self._midpoints is None:
                 self._midpoints = geometry.create_midpoint_tree(
                     self.mesh, self._dim, np.arange(len(self.parent), dtype=np.int32))
-            cells[~found] = geometry.compute_closest_entity(self._tree, self._midpoints,
-                                                            self.mesh, x[~found])
+            cells[missing] = geometry.compute_closest_entity(self._tree, self._midpoints,
+                                                             self.mesh, x[missing])
         return x, cells
 
     def at_points(self, samples, values, located):
