@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from soilbin.app.collapse import collapse_limit, collapse_pressure
+from soilbin.app.plateau import steady_force, steady_spread
 from soilbin.records.scene import load_scene
 from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix
@@ -203,6 +204,22 @@ def test_collapse_pressure_is_where_the_settlement_per_step_blows_up():
     assert collapse_pressure(curve + [record(20.6, 0.062)]) == 20.5
     assert collapse_pressure(curve[:2]) is None
     assert collapse_pressure(curve[:2] + [record(19.0, 0.052)]) == 19.0
+
+
+def test_the_steady_force_is_the_mean_over_the_last_sixth_of_the_travel():
+    """The plateau of a long travel: the force integrated over the last sixth of the final
+    displacement (its start interpolated on the curve), over that length; the spread is its
+    range there over the mean."""
+    def travel(displacements, forces):
+        return [StepRecord(0, 0.0, d, f, 1, 0, 0, 0.0, (), {}) for d, f in zip(displacements,
+                                                                               forces)]
+    flat = travel([1, 2, 3, 4, 5, 6], [5, 8, 9, 10, 10, 10])
+    assert steady_force(flat) == 10.0 and steady_spread(flat) == 0.0
+    uneven = travel([1, 2, 5.5, 6], [4, 8, 12, 6])
+    at_5 = 8 + 4 * 3 / 3.5
+    mean = 0.5 * (at_5 + 12) * 0.5 + 0.5 * (12 + 6) * 0.5
+    assert steady_force(uneven) == pytest.approx(mean, rel=1e-14)
+    assert steady_spread(uneven) == pytest.approx((12 - 6) / mean, rel=1e-14)
 
 
 def test_force_control_until_collapse_ends_where_the_travel_runs_away():

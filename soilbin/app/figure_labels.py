@@ -39,6 +39,7 @@ HEADLINES = {
     Headline.PEAK_FORCE: ("peak ", "force"), Headline.FINAL_PRESSURE: ("", "pressure"),
     Headline.PEAK_PRESSURE: ("peak ", "pressure"),
     Headline.COLLAPSE_PRESSURE: ("collapse ", "pressure"), Headline.FINAL_LIFT: ("", "lift"),
+    Headline.STEADY_FORCE: ("steady ", "force"),   # steady_spread: a ratio
 }
 
 #: Scene keys by their last part (a study's swept keys): (words, dimension).
@@ -95,7 +96,7 @@ def summary_label(key, scene):
     read off ('draft [lb]', 'collapse pressure [psi]'; divided by a scale, its key's words)."""
     if key in scene.headline:
         result = scene.headline[key]
-        if result.divide_by != 1.0:
+        if result.divide_by != 1.0 or result.of not in HEADLINES:   # a ratio
             return key.replace("_", " ")
         before, column = HEADLINES[result.of]
         words, dimension = column_words(column, scene)

@@ -22,6 +22,7 @@ from .estimates import blade_of, draft_estimates
 from .insitu import check_initial_stress
 from .outdir import prepare_on_rank0
 from .output import RunFolder
+from .plateau import steady_force, steady_spread
 
 
 
@@ -75,6 +76,8 @@ def headline_results(scene, records):
         Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
         Headline.COLLAPSE_PRESSURE: lambda: collapse_pressure(records),
         Headline.FINAL_LIFT: lambda: records[-1].columns["lift"],
+        Headline.STEADY_FORCE: lambda: steady_force(records),
+        Headline.STEADY_SPREAD: lambda: steady_spread(records),
     }
     values = {key: read[result.of]() for key, result in scene.headline.items()}
     return {key: None if value is None else value / scene.headline[key].divide_by

@@ -77,7 +77,9 @@ class Headline(enum.Enum):
     (in large deformation the geometry keeps the curve rising slowly and the
     last converged load does), and is none if no step gets there.
     The pressures are a loaded boundary's; ``final_lift`` is a tool's (the soil's
-    upward force on it: a rough wall's friction).
+    upward force on it: a rough wall's friction). ``steady_force`` is the force averaged over
+    the last sixth of the travel (the plateau of a tool pushed far: the steady draft over the
+    last inch of six), ``steady_spread`` its range there over that mean.
     """
     FINAL_DISPLACEMENT = "final_displacement"
     FINAL_PRESSURE = "final_pressure"
@@ -86,6 +88,8 @@ class Headline(enum.Enum):
     FINAL_FORCE = "final_force"
     PEAK_FORCE = "peak_force"
     FINAL_LIFT = "final_lift"
+    STEADY_FORCE = "steady_force"
+    STEADY_SPREAD = "steady_spread"
 
 
 #: Headline results read off a loaded boundary's pressure, and off a tool's lift.

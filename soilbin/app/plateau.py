@@ -1,0 +1,34 @@
+"""The plateau of a long travel (a tool pushed several depths through the soil): the force
+averaged over the last part of the travel, and how much it still varies there, for the run's
+headline (``steady_force``, ``steady_spread``)."""
+import numpy as np
+
+#: The plateau is the last this fraction of the final displacement: the last inch of six.
+STEADY_FRACTION = 1.0 / 6.0
+
+
+def plateau(records):
+    """(displacements, forces) of the converged steps in the last STEADY_FRACTION of the final
+    displacement, the window's start interpolated on the curve from zero."""
+    d = np.array([0.0] + [r.displacement for r in records])
+    f = np.array([0.0] + [r.force for r in records])
+    start = (1.0 - STEADY_FRACTION) * d[-1]
+    inside = d > start
+    return (np.concatenate([[start], d[inside]]),
+            np.concatenate([[np.interp(start, d, f)], f[inside]]))
+
+
+def steady_force(records):
+    """The mean force over the plateau, the curve integrated over the displacement (steps of
+    any length weigh by their travel)."""
+    d, f = plateau(records)
+    if d[-1] <= d[0]:
+        return float(f[-1])
+    return float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(d)) / (d[-1] - d[0]))
+
+
+def steady_spread(records):
+    """The force's range over the plateau, relative to its mean: how far the travel still is
+    from a steady state."""
+    _, f = plateau(records)
+    return float((f.max() - f.min()) / steady_force(records))
