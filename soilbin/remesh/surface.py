@@ -38,15 +38,20 @@ class Surface:
         """The three edges of each triangle in turn, (3 m, 2) point pairs, each pair sorted."""
         return np.sort(self.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
 
+    def shared_edges(self):
+        """Each edge once, (k, 2) point pairs, with its two triangles (k,) and (k,)."""
+        edges = self.edges()
+        order = np.lexsort(edges.T[::-1])
+        owner = order // 3          # edges() lists each triangle's three edges in turn
+        return edges[order[0::2]], owner[0::2], owner[1::2]
+
     def patches(self, crease):
         """The patch of each triangle (m,): the surface cut along the borders of its facet
         groups and where it folds by more than ``crease`` (radians) between two triangles."""
         a, b, c = (self.points[self.triangles[:, k]] for k in range(3))
         normal = np.cross(b - a, c - a)
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        owner = np.repeat(np.arange(len(self.triangles)), 3)
-        order = np.lexsort(self.edges().T[::-1])
-        first, second = owner[order[0::2]], owner[order[1::2]]   # each edge's two triangles
+        _, first, second = self.shared_edges()
         smooth = ((self.tags[first] == self.tags[second])
                   & (np.einsum("ij,ij->i", normal[first], normal[second]) > np.cos(crease)))
         m = len(self.triangles)
@@ -58,52 +63,17 @@ class Surface:
         """The :class:`Borders` of the patches ``patch_of`` (m,), found in an order of their
         own: gmsh's ``createTopology`` numbers the curves it finds in an order that changes
         from run to run (the process's memory), and with it the mesh gmsh makes."""
-        owner = np.repeat(np.arange(len(self.triangles)), 3)
-        edges = self.edges()
-        order = np.lexsort(edges.T[::-1])
-        first, second = order[0::2], order[1::2]   # each edge's two rows
-        pair = np.sort(np.column_stack([patch_of[owner[first]], patch_of[owner[second]]]),
-                       axis=1)
+        edge, first, second = self.shared_edges()
+        pair = np.sort(np.column_stack([patch_of[first], patch_of[second]]), axis=1)
         border = pair[:, 0] != pair[:, 1]
-        edge, pair = edges[first[border]], pair[border]
-        # a corner where the borders of more than one pair of patches meet, or where a border
-        # does not simply pass (it touches itself)
-        ends = edge.ravel()
-        pairs_at = {}
-        for point, key in zip(ends, np.repeat(pair, 2, axis=0).tolist()):
-            pairs_at.setdefault(int(point), []).append(tuple(key))
-        corners = {point for point, keys in pairs_at.items()
-                   if len(keys) != 2 or keys[0] != keys[1]}
-        curves, patches = [], []
+        edge, pair = edge[border], pair[border]
+        corners = _junctions(edge, pair)
+        curves, between = [], []
         for key in sorted(set(map(tuple, pair.tolist()))):
-            mine = edge[(pair == key).all(axis=1)].tolist()
-            next_to = {}
-            for a, b in mine:
-                next_to.setdefault(a, []).append(b)
-                next_to.setdefault(b, []).append(a)
-            unused = {tuple(sorted(e)) for e in mine}
-            starts = sorted(p for p in next_to if p in corners)
-            while unused:
-                if not starts:   # a closed border without a corner: its least point is one
-                    start = min(p for e in unused for p in e)
-                    corners.add(start)
-                    starts = [start]
-                chain = [starts[0]]
-                while True:
-                    step = [q for q in sorted(next_to[chain[-1]])
-                            if tuple(sorted((chain[-1], q))) in unused]
-                    if not step:
-                        break
-                    unused.discard(tuple(sorted((chain[-1], step[0]))))
-                    chain.append(step[0])
-                    if step[0] in corners:
-                        break
-                if len(chain) > 1:
-                    curves.append(chain)
-                    patches.append(key)
-                else:
-                    starts.pop(0)
-        bounding = [[k for k, key in enumerate(patches) if patch in key]
+            for chain in _chains(edge[(pair == key).all(axis=1)].tolist(), corners):
+                curves.append(chain)
+                between.append(key)
+        bounding = [[k for k, key in enumerate(between) if patch in key]
                     for patch in range(patch_of.max() + 1)]
         return Borders(np.array(sorted(corners), dtype=int), curves, bounding)
 
@@ -120,6 +90,48 @@ class Borders:
     corners: np.ndarray
     curves: list
     bounding: list
+
+
+def _junctions(edge, pair):
+    """The points where the borders (``edge`` (k, 2) between the patches ``pair`` (k, 2)) of
+    more than one pair of patches meet, or where a border does not simply pass (it touches
+    itself): a set."""
+    pairs_at = {}
+    for point, key in zip(edge.ravel().tolist(), np.repeat(pair, 2, axis=0).tolist()):
+        pairs_at.setdefault(point, []).append(tuple(key))
+    return {point for point, keys in pairs_at.items() if len(keys) != 2 or keys[0] != keys[1]}
+
+
+def _chains(edges, corners):
+    """The border ``edges`` (pairs of points) cut into chains from corner to corner, each from
+    its least corner on, along its least neighbour first; a closed chain without a corner
+    starts at its least point, added to ``corners``."""
+    next_to = {}
+    for a, b in edges:
+        next_to.setdefault(a, []).append(b)
+        next_to.setdefault(b, []).append(a)
+    unused = {tuple(sorted(e)) for e in edges}
+    starts = sorted(p for p in next_to if p in corners)
+    chains = []
+    while unused:
+        if not starts:
+            starts = [min(p for e in unused for p in e)]
+            corners.add(starts[0])
+        chain = [starts[0]]
+        while True:
+            step = [q for q in sorted(next_to[chain[-1]])
+                    if tuple(sorted((chain[-1], q))) in unused]
+            if not step:
+                break
+            unused.discard(tuple(sorted((chain[-1], step[0]))))
+            chain.append(step[0])
+            if step[0] in corners:
+                break
+        if len(chain) > 1:
+            chains.append(chain)
+        else:
+            starts.pop(0)
+    return chains
 
 
 def gather_surface(tagged):
