@@ -160,9 +160,9 @@ class LinearSolver:
     def set_operator(self, A, symmetric_tangent):
         """Factorise (or set up the preconditioner for) this iterate's matrix;
         ``symmetric_tangent()`` says whether it is symmetric (asked only if it matters)."""
-        start = time.process_time()
         use_lu = self.kind is LinearSolverKind.LU or (
             self.kind is LinearSolverKind.CHOLESKY and not (self._symmetric and symmetric_tangent()))
+        start = time.process_time()
         if use_lu and self.kind is LinearSolverKind.CHOLESKY:
             self.stats["unsymmetric_solves"] += 1
         self.stats["factorisations"] += 1
