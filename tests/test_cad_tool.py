@@ -1,6 +1,6 @@
 """The soil bin around a tool read from a CAD file (builder soil_bin_cad): the solid placed
-and cut out, its faces the contact group, and every file or placement it cannot use
-refused in one line before meshing."""
+and cut out, its faces the contact groups by the way they face, and every file or placement
+it cannot use refused in one line before meshing."""
 import gmsh
 import numpy as np
 import pytest
@@ -11,6 +11,7 @@ from mpi4py import MPI
 
 from soilbin.errors import InputError
 from soilbin.meshes import scene_mesh
+from soilbin.meshes.cad_tool import TOOL_FACES
 from soilbin.records.scene import load_scene
 from conftest import SCENES, make_problem
 
@@ -21,6 +22,17 @@ INCH = 25.4
 
 def total(form):
     return COMM.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
+
+
+def tool_area(tm):
+    """The area of each of the tool's groups, name -> area."""
+    one = fem.Constant(tm.mesh, 1.0)
+    ds = ufl.Measure("ds", domain=tm.mesh, subdomain_data=tm.facet_tags)
+    return {name: total(one * ds(tm.boundaries[name])) for name in TOOL_FACES}
+
+
+def tool_facets(tm):
+    return np.concatenate([tm.facet_tags.find(tm.boundaries[name]) for name in TOOL_FACES])
 
 
 def write_step(path, shape):
@@ -37,10 +49,10 @@ def write_step(path, shape):
 
 
 @pytest.mark.parametrize("configuration, width", [("embedded", 1.0), ("side_wall", 2.0)])
-def test_the_blade_s_cavity_is_the_tool_group(configuration, width):
+def test_the_blade_s_cavity_is_its_faces_by_the_way_they_face(configuration, width):
     """The STEP blade (0.5 x 2 in, 6 in in the soil): the soil is the bin less the blade's
-    part below the surface, the group tool its faces there (half the blade embedded, the
-    glass wall against its side otherwise)."""
+    part below the surface, its faces there in the groups of the built-in blade (half the
+    blade embedded, the glass wall against its side otherwise), none on top."""
     scene = load_scene(CAD, [f"mesh.configuration={configuration}", "mesh.element_size=1.5",
                              "mesh.growth=1.8"])
     p = scene.mesh
@@ -51,9 +63,10 @@ def test_the_blade_s_cavity_is_the_tool_group(configuration, width):
     length = p.behind + 0.5 + p.ahead
     assert total(one * ufl.dx(domain=tm.mesh)) == pytest.approx(
         length * p.bin_width * p.bin_depth - width * 0.5 * 6.0, rel=1e-9)
-    front_back, side, bottom = 2 * width * 6.0, 0.5 * 6.0, 0.5 * width
-    assert total(one * ds(tm.boundaries["tool"])) == pytest.approx(front_back + side + bottom,
-                                                                  rel=1e-9)
+    area = tool_area(tm)
+    expected = {"tool_front": width * 6.0, "tool_back": width * 6.0, "tool_side": 0.5 * 6.0,
+                "tool_bottom": 0.5 * width, "tool_top": 0.0}
+    assert area == pytest.approx(expected, rel=1e-9, abs=1e-12)
     assert total(one * ds(tm.boundaries["surface"])) == pytest.approx(
         length * p.bin_width - 0.5 * width, rel=1e-9)
 
@@ -63,7 +76,7 @@ def test_a_raked_tool_leans_back_with_its_lowest_point_at_the_tool_depth():
     reach down to tool_depth and lean back by tan 30 per unit of height."""
     scene = load_scene(CAD, ["mesh.rake_angle=60", "mesh.element_size=1.5", "mesh.growth=1.8"])
     tm = scene_mesh(scene, COMM)
-    facets = tm.facet_tags.find(tm.boundaries["tool"])
+    facets = tool_facets(tm)
     x = tm.mesh.geometry.x[entities_to_geometry(tm.mesh._mesh, 2, facets, False).ravel()]
     lowest = COMM.allreduce(x[:, 2].min(initial=np.inf), op=MPI.MIN)
     assert lowest == pytest.approx(-6.0, abs=1e-9)
@@ -144,12 +157,11 @@ def test_a_geo_script_is_a_tool_file_as_a_step_file_is(tmp_path):
     (tmp_path / "built-in.geo").write_text(GEO_BUILT_IN)
     meshes = [scene_mesh(load_scene(CAD, coarse + extra), COMM) for extra in (
         [], [f"mesh.tool_file={tmp_path / 'blade.geo'}", "mesh.tool_scale=1.0"])]
-    one = [fem.Constant(tm.mesh, 1.0) for tm in meshes]
-    volume = [total(c * ufl.dx(domain=tm.mesh)) for c, tm in zip(one, meshes)]
-    tool = [total(c * ufl.Measure("ds", domain=tm.mesh, subdomain_data=tm.facet_tags)(
-        tm.boundaries["tool"])) for c, tm in zip(one, meshes)]
+    volume = [total(fem.Constant(tm.mesh, 1.0) * ufl.dx(domain=tm.mesh)) for tm in meshes]
+    tool = [tool_area(tm) for tm in meshes]
     assert volume[1] == pytest.approx(volume[0], rel=1e-9)
-    assert tool[1] == pytest.approx(tool[0], rel=1e-9) and tool[0] == pytest.approx(15.5)
+    assert tool[1] == pytest.approx(tool[0], rel=1e-9, abs=1e-12)
+    assert sum(tool[0].values()) == pytest.approx(15.5)
     cells = [COMM.allreduce(tm.mesh.topology.index_map(3).size_local) for tm in meshes]
     assert cells[1] == pytest.approx(cells[0], rel=0.2)
     assert set(meshes[1].regions) == {"soil"}

@@ -9,6 +9,7 @@ import pytest
 
 from soilbin.errors import InputError
 from soilbin.meshes import BUILDERS, SoilBinParams
+from soilbin.meshes.cad_tool import TOOL_FACES as CAD_FACES
 from soilbin.meshes.soil_bin import TOOL_FACES
 from soilbin.params import from_table
 from soilbin.records.scene import load_scene
@@ -35,7 +36,7 @@ def test_the_records_layer_loads_no_fenicsx_gmsh_or_mpi():
 
 def test_every_builder_declares_its_contact_groups_among_its_boundaries():
     assert {name: b.contact for name, b in BUILDERS.items()} == {
-        "box": (), "strip_footing": (), "soil_bin": TOOL_FACES, "soil_bin_cad": ("tool",),
+        "box": (), "strip_footing": (), "soil_bin": TOOL_FACES, "soil_bin_cad": CAD_FACES,
         "retaining_wall": (), "gmsh": ()}
     for name, builder in BUILDERS.items():
         assert builder.name == name and builder.summary

@@ -6,7 +6,8 @@ boundaries are the contact surface of a rigid tool, and the module whose
 ``geometry(params, simplices)`` builds the gmsh model (of hexahedra, or of
 tetrahedra where ``simplices``, as the scene's element needs). That module is imported only
 when a mesh is built, so a scene can be read without gmsh; building checks
-that the geometry made exactly the declared groups, none of them empty. A
+that the geometry made exactly the declared groups, none of them empty but those it
+declares ``may_be_empty`` (a CAD tool's faces by the way they face: a flat blade has no top). A
 plane-strain builder may also make a two-dimensional mesh in the x-z plane
 (its parameter ``dimension``): then the faces of the slab in y
 (``slab_faces``) are not among its boundaries.
@@ -35,6 +36,7 @@ class Builder:
     geometry: str                # module (in soilbin.meshes) with geometry(params, simplices)
                                  # -> (regions, boundaries)
     slab_faces: tuple[str, ...] = ()  # boundaries only a three-dimensional mesh has
+    may_be_empty: tuple[str, ...] = ()  # boundaries a mesh may leave without facets
 
     def __post_init__(self):
         stray = set(self.contact) - set(self.boundaries)
@@ -73,7 +75,8 @@ class Builder:
         regions, boundaries, _ = self.groups(params)
         return build_tagged_mesh(comm, self.name, lambda: geometry(params, simplices),
                                  regions=regions, boundaries=boundaries,
-                                 dimension=self.dimension(params), simplices=simplices)
+                                 dimension=self.dimension(params), simplices=simplices,
+                                 may_be_empty=self.may_be_empty)
 
 
 def check_cell_count(cells, keys):

@@ -14,8 +14,11 @@ or its middle on the symmetry plane y = 0 (``embedded``: half of a tool symmetri
 about its mid-plane, refused if it is not), or its middle at y = 0 in a bin reaching
 ``bin_width`` to either side (``full``: a tool of any shape, no symmetry plane, both
 sides the group ``side``). The tool is not meshed: the soil is the bin minus the
-solid, and every soil face that is not on the bin's planes is the contact group
-``tool``. Elements are ``element_size`` long at the tool and grow
+solid, and every soil face that is not on the bin's planes is a contact face, in the group
+of the way it faces (:data:`TOOL_FACES`: the axis and sense nearest its normal out of the
+tool, as the built-in blade's faces; a group no face of the tool takes stays empty), so
+that a node on the edge between a front and a side face is a contact point of each, with
+its normal. Elements are ``element_size`` long at the tool and grow
 linearly with the distance d from it, h = element_size + (growth − 1) d (the size of
 a mesh whose neighbouring elements differ by the factor ``growth``), up to a
 quarter of the bin's depth.
@@ -39,6 +42,9 @@ class Configuration(enum.Enum):
     FULL = "full"              # the whole tool in the middle of a bin twice bin_width wide
 
 
+#: The contact groups, by the way a face of the tool faces: along +x (the travel), -x, +-y,
+#: -z, +z.
+TOOL_FACES = ("tool_front", "tool_back", "tool_side", "tool_bottom", "tool_top")
 #: The files gmsh's OpenCASCADE kernel reads, by suffix, and gmsh's own scripts.
 CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".brp", ".geo")
 #: Default length of soil ahead of and behind the tool, in tool depths (the flat blade
@@ -140,7 +146,8 @@ class CadToolBuilder(Builder):
 SOIL_BIN_CAD = CadToolBuilder(
     name="soil_bin_cad", params=CadToolParams,
     summary="soil bin (tetrahedra) around a rigid tool of any shape read from a STEP, IGES or "
-            "BREP file, graded toward it; the contact surface is the group tool",
+            "BREP file, graded toward it; the contact surface is the tool_* groups (by the "
+            "way each face of the tool faces)",
     regions=("soil",),
-    boundaries=("tool", "surface", "base", "symmetry", "side", "front_end", "back_end"),
-    contact=("tool",), geometry="cad_tool_geometry")
+    boundaries=TOOL_FACES + ("surface", "base", "symmetry", "side", "front_end", "back_end"),
+    contact=TOOL_FACES, may_be_empty=TOOL_FACES, geometry="cad_tool_geometry")

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import InputError
 from .builder import MAX_CELLS
-from .cad_tool import CadToolParams, Configuration
+from .cad_tool import TOOL_FACES, CadToolParams, Configuration
 
 #: Tetrahedra per cubed element length: a regular tetrahedron of edge h has the volume
 #: h^3 / (6 sqrt 2); gmsh's Delaunay cells, measured on the flat blade, come to about
@@ -18,6 +18,9 @@ from .cad_tool import CadToolParams, Configuration
 CELLS_PER_CUBE = 6.0
 #: A face lies on a plane of the bin where its centre does, to this part of the bin's size.
 ON_PLANE = 1e-9
+#: The tool's group of a face whose normal out of the tool is nearest (axis, positive).
+FACING = {(0, True): "tool_front", (0, False): "tool_back", (1, True): "tool_side",
+          (1, False): "tool_side", (2, False): "tool_bottom", (2, True): "tool_top"}
 #: The meshing options a tool's .geo script may set, put back after it has run.
 SCRIPT_OPTIONS = ("Mesh.MeshSizeMin", "Mesh.MeshSizeMax", "Mesh.MeshSizeFactor",
                   "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
@@ -37,20 +40,49 @@ def geometry(p: CadToolParams, simplices: bool):
     if configuration is Configuration.EMBEDDED:
         _check_symmetric(tool, p.tool_file)
     _check_cell_count(p, (x0, y0, z0, x1, y1, z1), length, y_min)
+    solid = occ.copy(tool)   # the tool's faces as read, oriented out of it (_facing)
     soil, _ = occ.cut([(3, occ.addBox(0.0, y_min, -p.bin_depth, length, p.bin_width - y_min,
                                       p.bin_depth))], tool)
     occ.synchronize()
     planes = [("back_end", 0, 0.0), ("front_end", 0, length),
               ("side" if full else "symmetry", 1, y_min), ("side", 1, p.bin_width),
               ("base", 2, -p.bin_depth), ("surface", 2, 0.0)]
-    boundaries = {name: [] for name in ["tool", *(name for name, _, _ in planes)]}
+    boundaries = {name: [] for name in [*TOOL_FACES, *(name for name, _, _ in planes)]}
+    tool_faces = []
     for _, face in gmsh.model.getBoundary(soil, oriented=False):
         centre = occ.getCenterOfMass(2, face)
         on = [name for name, axis, value in planes
               if abs(centre[axis] - value) <= ON_PLANE * length]
-        boundaries[on[0] if on else "tool"].append(face)
-    _grade(p, boundaries["tool"])
+        if on:
+            boundaries[on[0]].append(face)
+        else:
+            tool_faces.append(face)
+    for face, group in zip(tool_faces, _facing(tool_faces, solid)):
+        boundaries[group].append(face)
+    occ.remove(solid, recursive=True)
+    occ.synchronize()
+    _grade(p, tool_faces)
     return {"soil": [tag for _, tag in soil]}, boundaries
+
+
+def _facing(faces, solid):
+    """The group of each of the soil's faces on the tool: the axis and sense nearest the
+    normal out of the tool (+x front, -x back, +-y side, -z bottom, +z top) at the point of
+    the tool's surface nearest the face's centre (its centre of mass, moved onto it: a curved
+    face's lies off it, nearer the tool's other side for a thin curved tine). The normal is the tool ``solid``'s, as
+    read (a copy kept through the cut): the cut turns some faces it keeps whole, so that
+    their normals point into the tool (the blade's bottom against the glass wall)."""
+    model, occ = gmsh.model, gmsh.model.occ
+    surface = [tag for _, tag in model.getBoundary(solid, oriented=False)]
+    groups = []
+    for face in faces:
+        centre = model.getClosestPoint(2, face, occ.getCenterOfMass(2, face))[0]
+        nearest = [model.getClosestPoint(2, tag, centre) for tag in surface]
+        k = int(np.argmin([np.linalg.norm(np.subtract(x, centre)) for x, _ in nearest]))
+        normal = model.getNormal(surface[k], nearest[k][1])
+        axis = int(np.argmax(np.abs(normal)))
+        groups.append(FACING[axis, normal[axis] > 0.0])
+    return groups
 
 
 def _read_solid(path):

@@ -36,13 +36,14 @@ class TaggedMesh:
 
 def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Groups, Groups]], *,
                       regions: tuple[str, ...], boundaries: tuple[str, ...],
-                      dimension: int = 3, simplices: bool = False) -> TaggedMesh:
+                      dimension: int = 3, simplices: bool = False,
+                      may_be_empty: tuple[str, ...] = ()) -> TaggedMesh:
     """Mesh the gmsh model made by ``geometry`` on rank 0 and distribute it.
 
     ``geometry`` builds and synchronizes the model and returns the entities of
     ``dimension`` of each region and those one dimension lower of each
     boundary; they must be exactly the declared ``regions`` and ``boundaries``,
-    none empty. Groups are tagged 1, 2, ... in the declared order, regions
+    none empty but those of ``may_be_empty`` (named, tagged, without facets). Groups are tagged 1, 2, ... in the declared order, regions
     first, so no two groups share a tag. A two-dimensional geometry is built and
     meshed in the x-z plane, as the scene sees it. Its cells must be tetrahedra
     (triangles) where ``simplices``, else hexahedra (quadrilaterals).
@@ -52,7 +53,7 @@ def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Gr
         made_regions, made_boundaries = geometry()
         return _mesh_cells(name, _as_declared(name, "regions", regions, made_regions),
                            _as_declared(name, "boundaries", boundaries, made_boundaries), dimension,
-                           simplices)
+                           simplices, may_be_empty)
     return distribute(comm, name, model, dimension)
 
 
@@ -116,7 +117,7 @@ def _as_declared(name: str, kind: str, declared: tuple[str, ...], made: Groups) 
 
 
 def _mesh_cells(name: str, regions: Groups, boundaries: Groups, dimension: int,
-                simplices: bool) -> tuple[dict[str, int], dict[str, int]]:
+                simplices: bool, may_be_empty=()) -> tuple[dict[str, int], dict[str, int]]:
     """Add the physical groups, mesh, and check the cells."""
     unassigned = {t for _, t in gmsh.model.getEntities(dimension)} - set().union(*regions.values())
     if unassigned:
@@ -124,7 +125,7 @@ def _mesh_cells(name: str, regions: Groups, boundaries: Groups, dimension: int,
                            "region; their cells would be lost")
     numbers = itertools.count(1)
     tags = (_add_physical_groups(dimension, regions, numbers),
-            _add_physical_groups(dimension - 1, boundaries, numbers))
+            _add_physical_groups(dimension - 1, boundaries, numbers, may_be_empty))
     _generate(name, dimension)
     check_cells(RuntimeError, "gmsh made", dimension, simplices)
     return tags
@@ -159,10 +160,14 @@ def check_cells(error, source, dimension=3, simplices=False):
                     f"needs {only} only")
 
 
-def _add_physical_groups(dim: int, groups: Groups, numbers) -> dict[str, int]:
-    """One named physical group per entry, numbered by ``numbers``; name -> tag."""
+def _add_physical_groups(dim: int, groups: Groups, numbers, may_be_empty=()) -> dict[str, int]:
+    """One named physical group per entry, numbered by ``numbers``; name -> tag (a group of
+    ``may_be_empty`` without entities takes its number, and no physical group)."""
     tags = {}
     for group, entities in groups.items():
+        if not entities and group in may_be_empty:
+            tags[group] = next(numbers)
+            continue
         if not entities:
             raise RuntimeError(f"physical group {group!r} has no entities")
         tags[group] = gmsh.model.addPhysicalGroup(dim, entities, next(numbers))
