@@ -7,6 +7,7 @@ import pytest
 from soilbin.errors import InputError
 from soilbin.models.mohr_coulomb_interface import MohrCoulombInterface
 from soilbin.params import from_table
+from conftest import make_problem
 
 LAW = MohrCoulombInterface(k_n=1e5, k_s=4e4, c_a=3.0, delta=25.0)
 NORMAL = np.array([0.0, 0.0, -1.0])
@@ -129,6 +130,25 @@ def block_scene(tmp_path, supports):
 #: The patch tests on the box's quadrilateral faces and on its triangles (each brick in six
 #: tetrahedra).
 ELEMENTS = pytest.mark.parametrize("element", ["hex8", "tet10-bbar"])
+
+
+def test_every_node_of_a_six_node_triangle_is_a_contact_point(tmp_path):
+    """A corner's φ of a six-node triangle integrates to zero over it: the contact areas are
+    the lumped ones instead, a corner A/19 and a mid-edge node 16 A/57 of each triangle, so
+    that every node of the tool's face (none free to pass into the tool) is a contact point,
+    and they sum to the face's area."""
+    problem = make_problem(block_scene(tmp_path, HELD_AT_WALL), "analysis.element=tet10-bbar")
+    interface = problem.tool.interface
+    x = interface.scalar_space.tabulate_dof_coordinates()
+    owned = interface.scalar_space.dofmap.index_map.size_local
+    on_base = np.flatnonzero(np.isclose(x[:owned, 2], 0.0))
+    assert np.array_equal(np.sort(interface.nodes), on_base) and len(on_base) == 15
+    assert (interface.areas > 0.0).all() and interface.areas.sum() == pytest.approx(2.0, rel=1e-12)
+    at = x[interface.nodes, :2]
+    corner = np.isclose(at, np.round(at)).all(axis=1)    # the squares' corners
+    assert corner.sum() == 6
+    # each of the four triangles (0.5 each) gives each of its three corners A/19
+    assert interface.areas[corner].sum() == pytest.approx(3 * 2.0 / 19.0, rel=1e-12)
 
 
 @ELEMENTS

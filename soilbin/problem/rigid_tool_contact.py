@@ -7,8 +7,12 @@ face) pair is a contact point with its tributary area A = ∫ φ_node ds over
 the face and the face normal averaged at the node: the penalty terms are
 integrated with the nodal (lumped) rule, so the law and its slip history
 live exactly at the contact points and a node on an edge of the tool
-touches both faces. Residual += A t(u − U), Jacobian += A dt/djump on the
-node's own 3x3 block (rows and columns of Dirichlet dofs left alone). On a
+touches both faces. On the six-node triangles of quadratic tetrahedra a
+corner's φ integrates to zero over the triangle, which would leave the
+corners free to pass into the tool: there the areas are the consistent
+diagonal ∫ φ² ds scaled to the triangle's area (Hinton, Rock & Zienkiewicz
+1976: a corner A/19, a mid-edge node 16 A/57). Residual += A t(u − U), Jacobian
++= A dt/djump on the node's own 3x3 block (rows and columns of Dirichlet dofs left alone). On a
 two-dimensional mesh the law still works in the scene's three components (the
 jump's y component is zero, so is the traction's); the node's dofs are its x
 and z ones, which take those components of the traction and the 2x2 block of
@@ -35,6 +39,10 @@ from ..solver.linear_solver import all_symmetric
 from ..tensors import from_mandel
 
 
+#: A six-node triangle's area over its consistent diagonal's sum, (3 x 6 + 3 x 32) / 180.
+HRZ_SIX_NODE_TRIANGLE = 30.0 / 19.0
+
+
 class RigidToolContact:
     def __init__(self, disc, w, facet_tags, face_tags, law, bcs, travel, incremental,
                  initial_stress=None):
@@ -55,6 +63,7 @@ class RigidToolContact:
         nodal_dofs = np.empty((owned + nodes_map.num_ghosts, len(self.axes)), dtype=np.int32)
         nodal_dofs[scalar_space.dofmap.list.array] = np.stack(
             [V.sub(i).dofmap.list.array for i in range(len(self.axes))], axis=1)
+        self.scalar_space = scalar_space
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
         phi = ufl.TestFunction(scalar_space)
         normal = disc.normal()
@@ -66,9 +75,13 @@ class RigidToolContact:
         # would each be compiled on a fresh machine): the face and the direction are constants.
         face = fem.Constant(mesh, np.zeros(len(face_tags)))
         direction = fem.Constant(mesh, np.zeros(3))
+        weight = phi        # a linear form: ∫ φ ds; a bilinear one: its diagonal (module doc)
+        if (mesh.topology.dim == 3 and disc.element.simplex
+                and scalar_space.ufl_element().degree() == 2):
+            weight = HRZ_SIX_NODE_TRIANGLE * ufl.TrialFunction(scalar_space) * phi
         area_form, normal_form = (
             fem.form(sum(face[k] * integrand * ds(tag) for k, tag in enumerate(face_tags)))
-            for integrand in (phi, ufl.dot(normal, direction) * phi))
+            for integrand in (weight, ufl.dot(normal, direction) * weight))
 
         def component(i):
             direction.value[:] = np.eye(3)[i]
@@ -90,7 +103,6 @@ class RigidToolContact:
             normals.append(n[contact])
         #: Held dofs of the nodes that are the supports', not contact points (module doc).
         self.support_dofs = np.unique(np.concatenate(pressed_dofs))
-        self.scalar_space = scalar_space
         self.points_per_face = [len(n) for n in nodes]
         self._face_tags = list(face_tags)
         self.nodes = np.concatenate(nodes)               # local node index per contact point
@@ -118,9 +130,17 @@ class RigidToolContact:
         self._tangent = np.zeros((len(self.nodes), 3, 3))
         self.comm = mesh.comm
 
-    @staticmethod
-    def _nodal(form):
-        """A linear form over the P1 scalar space, assembled and summed over ranks, per local node."""
+    def _nodal(self, form):
+        """A linear form over the scalar space, assembled and summed over ranks, or a bilinear
+        one's diagonal; per local node."""
+        if form.rank == 2:
+            A = fem.petsc.assemble_matrix(form)
+            A.assemble()
+            diagonal = fem.Function(self.scalar_space)
+            A.getDiagonal(diagonal.vector)
+            A.destroy()
+            diagonal.x.scatter_forward()
+            return diagonal.x.array.copy()
         b = fem.petsc.assemble_vector(form)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
