@@ -7,7 +7,8 @@ boundaries are the contact surface of a rigid tool, and the module whose
 tetrahedra where ``simplices``, as the scene's element needs). That module is imported only
 when a mesh is built, so a scene can be read without gmsh; building checks
 that the geometry made exactly the declared groups, none of them empty but those it
-declares ``may_be_empty`` (a CAD tool's faces by the way they face: a flat blade has no top). A
+declares ``may_be_empty`` (a CAD tool's faces by the way they face: a flat blade has no
+top). A
 plane-strain builder may also make a two-dimensional mesh in the x-z plane
 (its parameter ``dimension``): then the faces of the slab in y
 (``slab_faces``) are not among its boundaries.

@@ -69,9 +69,10 @@ def _facing(faces, solid):
     """The group of each of the soil's faces on the tool: the axis and sense nearest the
     normal out of the tool (+x front, -x back, +-y side, -z bottom, +z top) at the point of
     the tool's surface nearest the face's centre (its centre of mass, moved onto it: a curved
-    face's lies off it, nearer the tool's other side for a thin curved tine). The normal is the tool ``solid``'s, as
-    read (a copy kept through the cut): the cut turns some faces it keeps whole, so that
-    their normals point into the tool (the blade's bottom against the glass wall)."""
+    face's lies off it, nearer the tool's other side for a thin curved tine). The normal is
+    the tool ``solid``'s, as read (a copy kept through the cut): the cut turns some faces it
+    keeps whole, so that their normals point into the tool (the blade's bottom against the
+    glass wall)."""
     model, occ = gmsh.model, gmsh.model.occ
     surface = [tag for _, tag in model.getBoundary(solid, oriented=False)]
     groups = []

@@ -1,6 +1,7 @@
 """``python -m soilbin.models``: compile every model's kernels into numba's disk cache (one
 update of each conformance sample, and the symmetry check of its tangent), so that the
-first run of a scene does not wait for the compiler. ``make setup`` runs it after the sources change."""
+first run of a scene does not wait for the compiler. ``make setup`` runs it after the
+sources change."""
 import time
 
 from ..params import from_table

@@ -11,12 +11,12 @@ touches both faces. On the six-node triangles of quadratic tetrahedra a
 corner's φ integrates to zero over the triangle, which would leave the
 corners free to pass into the tool: there the areas are the consistent
 diagonal ∫ φ² ds scaled to the triangle's area (Hinton, Rock & Zienkiewicz
-1976: a corner A/19, a mid-edge node 16 A/57). Residual += A t(u − U), Jacobian
-+= A dt/djump on the node's own 3x3 block (rows and columns of Dirichlet dofs left alone). On a
-two-dimensional mesh the law still works in the scene's three components (the
-jump's y component is zero, so is the traction's); the node's dofs are its x
-and z ones, which take those components of the traction and the 2x2 block of
-the tangent.
+1976: a corner A/19, a mid-edge node 16 A/57). Residual += A t(u − U),
+Jacobian += A dt/djump on the node's own 3x3 block (rows and columns of
+Dirichlet dofs left alone). On a two-dimensional mesh the law still works in
+the scene's three components (the jump's y component is zero, so is the
+traction's); the node's dofs are its x and z ones, which take those
+components of the traction and the 2x2 block of the tangent.
 
 A support may hold a node of a face too. Along the face (the block on a
 plate, held at its end, that the plate slides under) the law still acts:
