@@ -45,8 +45,9 @@ def build_tagged_mesh(comm: MPI.Comm, name: str, geometry: Callable[[], tuple[Gr
     boundary; they must be exactly the declared ``regions`` and ``boundaries``,
     none empty but those of ``may_be_empty`` (named, tagged, without facets). Groups are
     tagged 1, 2, ... in the declared order, regions first, so no two groups share a tag. A
-    two-dimensional geometry is built and meshed in the x-z plane, as the scene sees it. Its cells must be tetrahedra
-    (triangles) where ``simplices``, else hexahedra (quadrilaterals).
+    two-dimensional geometry is built and meshed in the x-z plane, as the scene sees it.
+    Its cells must be tetrahedra (triangles) where ``simplices``, else hexahedra
+    (quadrilaterals).
     """
     def model():
         gmsh.model.add(name)
