@@ -453,6 +453,19 @@ def test_remeshing_a_scene_it_cannot_is_refused_on_reading(overrides, words):
         load_scene(SCENES / "strip-footing-penetration.toml", overrides)
 
 
+def test_a_surface_gmsh_cannot_map_ends_the_run_with_its_steps_on_disk(tmp_path, monkeypatch):
+    """gmsh's own error while mapping the patches (a bare Exception: the tine's soil after 4 in
+    of travel) is a failed remesh, not an internal error: status failed, steps on disk."""
+    def unmappable():
+        raise Exception("Wrong topology of boundary mesh for parametrization")
+    monkeypatch.setattr(gmsh.model.mesh, "createGeometry", unmappable)
+    summary = run_scene(load_scene(SCENES / "block-drucker-prager.toml", BLOCK_3D), tmp_path)
+    assert summary["status"] == "failed" and summary["n_steps"] == 4
+    assert "remeshing after step 4 failed: gmsh cannot map" in summary["message"]
+    assert "Wrong topology" in summary["message"]
+    assert len(curve(tmp_path)) == 4
+
+
 def test_a_remesh_that_fails_ends_the_run_with_its_steps_on_disk(tmp_path, monkeypatch):
     """gmsh failing on the deformed soil: status failed, the message says where, every
     converged step and the last good mesh's checkpoint stay."""

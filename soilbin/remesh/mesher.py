@@ -86,7 +86,12 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path):
     def model():
         gmsh.model.add("remesh")
         groups = _discrete_model(surface)
-        gmsh.model.mesh.createGeometry()
+        try:
+            gmsh.model.mesh.createGeometry()
+        except Exception as err:   # gmsh raises a bare Exception with its last error
+            raise RuntimeError(f"gmsh cannot map the deformed soil's boundary patches onto "
+                               f"planes ({err}): a patch is no longer a topological "
+                               "disc") from None
         faces = [entity for _, entity in gmsh.model.getEntities(2)]
         volume = gmsh.model.geo.addVolume([gmsh.model.geo.addSurfaceLoop(faces)])
         gmsh.model.geo.synchronize()
