@@ -205,16 +205,15 @@ class Remeshing:
             self._built = (initial, initial_sizes(initial, simplices))
         if self._built_cells is None:
             self._built_cells = OldCells(self._built[0], simplices)
-        built_sizes = self._built[1][self._built_cells.parent[
-            self._built_cells.locate(initial.mean(axis=1))[1]]]
+        built = self._built[1][self._built_cells.parent]   # each built simplex's cell's size
+        built_sizes = built[self._built_cells.locate(initial.mean(axis=1))[1]]
         if tool_shift is not None:
             # Around the tool where it now is, the sizes it was built with around it: at the
             # place that lay where each cell now lies relative to the tool (none where that
             # place was not soil), so that the fine cells at the tool go with it.
             holding = self._built_cells.holding(corners.mean(axis=1) - tool_shift)[1]
             inside = holding >= 0
-            built_sizes[inside] = np.minimum(
-                built_sizes[inside], self._built[1][self._built_cells.parent[holding[inside]]])
+            built_sizes[inside] = np.minimum(built_sizes[inside], built[holding[inside]])
         grain = GRAIN * np.abs(corners).max()
         corners = state["kinematics/mesh_x"][1][:, :, :d] = _rounded(corners, grain)
         sizes, at_node = _size_field(corners, built_sizes, simplices)
