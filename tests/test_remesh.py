@@ -109,7 +109,7 @@ def test_the_surface_is_cut_into_patches_at_folds_and_at_group_borders():
         return len(np.unique(Surface.of(corners, tags).patches(np.radians(crease))))
     assert patches(tags, 40.0) == 6
     assert patches(one_group, 40.0) == 6
-    assert patches(one_group, 100.0) == 1
+    assert patches(one_group, 100.0) == 2   # one closed patch: not a disc, cut in two
     split = tags.copy()
     split[11] = 7   # one triangle of the top face in a group of its own: a border on a flat face
     assert patches(split, 40.0) == 7
@@ -156,16 +156,46 @@ def refined_box_surface(n):
     return np.array(corners), np.array(tags)
 
 
+def cube_sizes(size):
+    """:class:`~soilbin.remesh.mesher.Sizes` of ``size`` over the unit cube."""
+    from soilbin.remesh.mesher import Sizes
+    kuhn = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]]
+    cube = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float)
+    return Sizes(cube[kuhn], np.full((6, 4), size))
+
+
+def test_a_patch_pinched_at_a_point_is_cut_into_discs_and_meshed(tmp_path):
+    """gmsh maps each patch onto a plane, so each must be a topological disc. A piece cut out
+    of a patch that touches the patch's border at one point (the tine's soil after 4 in: a
+    triangle of the free surface folded past the crease, one corner on the tool) leaves
+    the patch's border passing twice through that point, and gmsh cannot map it: the patch
+    is cut through the piece."""
+    from mpi4py import MPI
+    from soilbin.remesh.mesher import CREASE, mesh_surface
+    from soilbin.remesh.surface import euler_characteristic
+    corners, tags = refined_box_surface(4)
+    centroid = corners.mean(axis=1)
+    # the top's triangle (0, 0.25), (0.25, 0.25), (0.25, 0.5): one corner on its edge x = 0
+    piece = (tags == 6) & np.isclose(centroid[:, 0], 1 / 6) & np.isclose(centroid[:, 1], 1 / 3)
+    tags[piece] = 7
+    surface = Surface.of(corners, tags)
+    patch_of = surface.patches(CREASE)
+    assert (euler_characteristic(surface.triangles, patch_of) == 1).all()
+    assert len(np.unique(patch_of[surface.tags == 6])) > 1
+    mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1},
+                 {f"face{k}": k for k in range(1, 8)}, tmp_path / "pinched.msh")
+    mesh = meshio.read(tmp_path / "pinched.msh")
+    assert sum(len(c) for c in mesh.cells_dict.values()) > 0
+
+
 def test_a_surface_is_meshed_the_same_way_every_time(tmp_path):
     """The mesh of a surface depends on the surface alone, not on what the process did before
     (gmsh's own createTopology numbered the curves in an order that changed from run to run,
     and the tetrahedra with it)."""
     from mpi4py import MPI
-    from soilbin.remesh.mesher import Sizes, mesh_surface
+    from soilbin.remesh.mesher import mesh_surface
     surface = Surface.of(*refined_box_surface(3))
-    kuhn = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]]
-    cube = np.array([[i & 1, (i >> 1) & 1, (i >> 2) & 1] for i in range(8)], dtype=float)
-    sizes = Sizes(cube[kuhn], np.full((6, 4), 0.3))
+    sizes = cube_sizes(0.3)
     meshes = []
     for attempt in range(3):
         junk = [np.empty(1000 + 997 * attempt * k) for k in range(50)]   # another heap
