@@ -188,6 +188,27 @@ def test_a_patch_pinched_at_a_point_is_cut_into_discs_and_meshed(tmp_path):
     assert sum(len(c) for c in mesh.cells_dict.values()) > 0
 
 
+def test_a_soil_folded_onto_itself_is_named_where_gmsh_cannot_fill_it(tmp_path):
+    """A boundary that passes through itself (the heave beside the tine after 5.6 in curled
+    onto the soil's face at the tool's side: there is no self-contact) cannot be filled with
+    tetrahedra; the remesh's message says where it crosses, between which groups."""
+    from mpi4py import MPI
+    from soilbin.remesh.mesher import mesh_surface
+    corners, tags = refined_box_surface(4)
+    middle = (corners == [0.5, 0.5, 1.0]).all(axis=2)
+    corners[middle] = [0.5, 0.5, -0.5]     # the top's middle pushed down through the bottom
+    surface = Surface.of(corners, tags)
+    points, crossed = surface.crossings()
+    assert len(points) > 0 and np.allclose(points[:, 2], 0.0)
+    assert {tuple(t) for t in crossed} <= {(6, 5), (5, 6)}
+    assert len(Surface.of(*refined_box_surface(4)).crossings()[0]) == 0
+    with pytest.raises(RuntimeError, match=r"folded onto itself \(no self-contact\), its "
+                                           r"boundary (top|bottom) passing through (bottom|top) at"):
+        mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1},
+                     {"bottom": 5, "top": 6, **{f"face{k}": k for k in range(1, 5)}},
+                     tmp_path / "folded.msh")
+
+
 def test_a_surface_is_meshed_the_same_way_every_time(tmp_path):
     """The mesh of a surface depends on the surface alone, not on what the process did before
     (gmsh's own createTopology numbered the curves in an order that changed from run to run,

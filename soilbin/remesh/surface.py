@@ -118,6 +118,27 @@ class Surface:
                     for patch in range(patch_of.max() + 1)]
         return Borders(np.array(sorted(corners), dtype=int), curves, bounding)
 
+    def crossings(self, chunk=256):
+        """Where an edge of the surface passes through a triangle it does not touch (a soil
+        folded onto itself: soilbin has no self-contact): the points (k, 3) and the tags of
+        the edge's triangle and of the triangle crossed (k, 2)."""
+        corners = self.points[self.triangles]
+        lo, hi = corners.min(axis=1), corners.max(axis=1)
+        points, tags = [], []
+        for start in range(0, len(corners), chunk):
+            rows = slice(start, start + chunk)
+            near = ((lo[rows, None] <= hi[None]) & (lo[None] <= hi[rows, None])).all(axis=2)
+            apart = ~(self.triangles[rows, None, :, None]
+                      == self.triangles[None, :, None, :]).any(axis=(2, 3))
+            for a, b in zip(*np.nonzero(near & apart)):
+                a += start
+                for k in range(3):
+                    point = _through(corners[a, k], corners[a, (k + 1) % 3], corners[b])
+                    if point is not None:
+                        points.append(point)
+                        tags.append((self.tags[a], self.tags[b]))
+        return np.reshape(points, (-1, 3)), np.reshape(tags, (-1, 2)).astype(int)
+
     def on_grid(self, grain):
         """The surface with its points rounded to a grid of ``grain``."""
         return Surface.of(np.round(self.points[self.triangles] / grain) * grain, self.tags)
@@ -147,6 +168,19 @@ def euler_characteristic(triangles, patch_of):
 def edges_of(triangles):
     """The three edges of each triangle in turn, (3 m, 2) point pairs, each pair sorted."""
     return np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+
+
+def _through(p, q, triangle):
+    """The point where the segment pq passes through the inside of ``triangle`` (3, 3), or
+    None."""
+    a, b, c = triangle
+    normal = np.cross(b - a, c - a)
+    above_p, above_q = np.dot(p - a, normal), np.dot(q - a, normal)
+    if above_p * above_q >= 0.0:
+        return None
+    x = p + above_p / (above_p - above_q) * (q - p)
+    inside = all(np.dot(np.cross(v - u, x - u), normal) > 0.0 for u, v in ((a, b), (b, c), (c, a)))
+    return x if inside else None
 
 
 def _junctions(edge, pair):
