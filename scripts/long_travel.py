@@ -1,0 +1,99 @@
+"""The 2-in tool's long travel against the mesh: studies/tine-long-travel.toml, its tables in
+docs/chapter8.md.
+
+Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each case's
+summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
+docs/chapter8.md (--page) two tables: per mesh the draft and the lift at each inch of
+travel and the draft over the last inch (mean and spread); and what the travel cost
+(cells, remeshes, steps, Newton iterations, wall time, and a remesh against a Newton
+iteration). Copies the study's figure into docs/figures (--figures DIR). Loads in lb,
+travel in in.
+"""
+import csv
+import shutil
+
+from soilbin.app.study import Outcome, draw_figures, load_study
+from soilbin.records.scene import load_scene
+from doc_tables import ROOT, write_between_markers
+from study_tables import arguments, at, finished, run_study
+
+NAME = "tine-long-travel"
+SIZE = "mesh.element_size"
+TRAVELS = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
+
+
+def remeshes(folder):
+    """The rows of a run's remeshes.csv, as numbers (none if it never remeshed)."""
+    try:
+        with open(folder / "remeshes.csv") as f:
+            return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    except OSError:
+        return []
+
+
+def size_of(case, scene_size):
+    size = case.values.get(SIZE, scene_size)
+    return f"{size:g}" + (" (the scene's)" if size == scene_size else "")
+
+
+def drafts(results, scene_size):
+    lines = ["| element size [in] | travel [in] (status) | "
+             + " | ".join(f"draft at {t:g} in [lb]" for t in TRAVELS)
+             + " | lift at the end [lb] | draft over the last sixth of the travel [lb] | its spread |",
+             "| --- | --- | " + "--- | " * len(TRAVELS) + "--- | --- | --- |"]
+    for case, summary, rows, _ in results:
+        cells = [f"{d:.1f}" if (d := at(rows, "force", t)) is not None else "–" for t in TRAVELS]
+        lines.append(f"| {size_of(case, scene_size)} | {rows[-1]['displacement']:.2f} "
+                     f"({summary['status']}) | "
+                     + " | ".join(cells) + f" | {rows[-1]['lift']:.1f} | "
+                     f"{summary['steady_draft']:.1f} | {100 * summary['steady_spread']:.1f}% |")
+    return "\n".join(lines)
+
+
+def costs(results, scene_size):
+    lines = ["| element size [in] | cells at the start → the end | unknowns at the end | "
+             "remeshes | steps (cuts) | Newton (failed) | wall time [min] | a Newton "
+             "iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for case, summary, _, remeshed in results:
+        iterations = summary["newton_iterations"] + summary["failed_newton_iterations"]
+        per_iteration = summary["wall_s"] / iterations
+        first = int(remeshed[0]["cells_before"]) if remeshed else summary["n_cells"]
+        if remeshed:
+            moved = [r["mesh_s"] + r["transfer_s"] for r in remeshed]
+            settled = [r["equilibrium_s"] for r in remeshed]
+            iterations_worth = sum(moved) / len(moved) / per_iteration
+            remesh = f"{min(moved):.1f}–{max(moved):.1f} ({iterations_worth:.1f} iterations)"
+            equilibrium = f"{min(settled):.0f}–{max(settled):.0f}"
+        else:
+            remesh = equilibrium = "–"
+        lines.append(f"| {size_of(case, scene_size)} | {first} → {summary['n_cells']} | "
+                     f"{summary['n_dofs']} | {len(remeshed)} | {summary['n_steps']} "
+                     f"({summary['cuts']}) | {summary['newton_iterations']} "
+                     f"({summary['failed_newton_iterations']}) | {summary['wall_s'] / 60:.0f} | "
+                     f"{per_iteration:.2f} | {remesh} | {equilibrium} |")
+    return "\n".join(lines)
+
+
+def main():
+    args = arguments(__doc__, NAME, "chapter8.md")
+    path = ROOT / "studies" / f"{NAME}.toml"
+    run_study(path, args)
+    study = load_study(path)
+    results = [(case, summary, rows, remeshes(args.out / case.name))
+               for case, summary, rows in finished(study, args.out) if rows]
+    if not results:
+        raise SystemExit(f"{args.out}: no finished case")
+    results.sort(key=lambda r: -r[0].values.get(SIZE, 0.0))
+    scene_size = load_scene(study.scene_path).mesh.element_size
+    text = drafts(results, scene_size) + "\n\n" + costs(results, scene_size) + "\n"
+    print(text)
+    draw_figures(study, [Outcome(case, summary["status"], summary, ran=False)
+                         for case, summary, _, _ in results], args.out)
+    for figure in study.figures:
+        shutil.copy(args.out / f"{figure.name}.png", args.figures / f"{figure.name}.png")
+    write_between_markers(args.page, NAME, text)
+
+
+if __name__ == "__main__":
+    main()
