@@ -81,7 +81,7 @@ def main():
     run_study(path, args)
     study = load_study(path)
     results = [(case, summary, rows, remeshes(args.out / case.name))
-               for case, summary, rows in finished(study, args.out) if rows]
+               for case, summary, rows in finished(study, args.out, interrupted=True) if rows]
     if not results:
         raise SystemExit(f"{args.out}: no finished case")
     results.sort(key=lambda r: -r[0].values.get(SIZE, 0.0))

@@ -42,17 +42,17 @@ def run_study(study, args, out=None):
                        cwd=ROOT, env={**os.environ, "OMP_NUM_THREADS": "1"})
 
 
-def finished(study, folder):
+def finished(study, folder, interrupted=False):
     """(case, summary, curve rows) of every case of the study, in its order, that left the
-    summary of a run that was not interrupted in its folder (of this code or an earlier
-    one: the study itself decides what to run again)."""
+    summary of a run in its folder (of this code or an earlier one: the study itself decides
+    what to run again), unless the run was interrupted and ``interrupted`` is false."""
     for case in study.cases:
         run = folder / case.name
         try:
             summary = json.loads((run / "summary.json").read_text())
         except OSError:
             continue
-        if summary["status"] == "interrupted":
+        if summary["status"] == "interrupted" and not interrupted:
             continue
         with open(run / "curve.csv") as f:
             rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
