@@ -3,11 +3,12 @@ docs/chapter8.md.
 
 Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each case's
 summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
-docs/chapter8.md (--page) two tables: per mesh the draft and the lift at each inch of
-travel and the draft over the last inch (mean and spread); and what the travel cost
-(cells, remeshes, steps, Newton iterations, wall time, and a remesh against a Newton
-iteration). Copies the study's figure into docs/figures (--figures DIR). Loads in lb,
-travel in in.
+docs/chapter8.md (--page) two tables: per mesh the draft at each inch of travel, the lift at
+the end and the draft over the last sixth of the travel (mean and spread); and what the
+travel cost (cells, remeshes, steps, Newton iterations, wall time, and a remesh against a
+Newton iteration). A case that failed (a remesh that could not be made) or was interrupted
+shows how far it went. Copies the study's figures into docs/figures (--figures DIR). Loads
+in lb, travel in in.
 """
 import csv
 import shutil
