@@ -53,8 +53,8 @@ def drafts(results, scene_size):
 
 def costs(results, scene_size):
     lines = ["| element size [in] | cells at the start → the end | unknowns at the end | "
-             "remeshes | steps (cuts) | Newton (failed) | wall time [min] | a Newton "
-             "iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] |",
+             "remeshes | steps (cuts) | Newton (failed) | wall time [min] | wall time per "
+             "Newton iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for case, summary, _, remeshed in results:
         iterations = summary["newton_iterations"] + summary["failed_newton_iterations"]
