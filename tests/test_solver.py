@@ -158,3 +158,32 @@ def test_the_critical_point_line_search_stops_where_the_energy_is_stationary():
     assert abs(g) <= CP_TOLERANCE * abs(g0) or (g < 0.0 and took_full_step)
     problem.roll_back()
     assert problem.solve().iterations <= 25
+
+
+def test_the_tangent_floor_moves_newtons_matrix_and_not_its_solution():
+    """solver.tangent_floor = ε: every cap point's tangent in the forms is C_tan + ε C_el,
+    the residual at an iterate is the same to the bit, and the curve is the same to the
+    residual floor (the floor changes the path of Newton's iterates only)."""
+    floor = 1e-4
+    tangents, curves, residuals = {}, {}, {}
+    for eps in (0.0, floor):
+        problem = make_problem("tine-2in-90deg", *COARSE_TINE, "solver.atol=1e-10",
+                               f"solver.tangent_floor={eps}")
+        rng = np.random.default_rng(5)
+        problem.w.x.array[:] = 1e-3 * rng.standard_normal(len(problem.w.x.array))
+        for bc in problem.bcs:   # an iterate that meets the supports: no lifting by the matrix
+            problem.w.x.array[bc.dof_indices()[0]] = 0.0
+        b = problem.w.vector.duplicate()
+        problem.newton.residual(b)
+        residuals[eps] = b.array.copy()
+        tangents[eps] = problem.points._tangent.copy()
+        problem.w.x.array[:] = 0.0
+        result = run_load_steps(problem, 2, 3, lambda r: None)
+        assert result.complete
+        curves[eps] = np.array([(r.load_factor, r.force) for r in result.steps])
+    assert np.array_equal(residuals[floor], residuals[0.0])
+    (model,) = problem.points.models.values()
+    lifted = tangents[floor] - tangents[0.0]
+    assert np.allclose(lifted, floor * model.stiffness, rtol=1e-6, atol=1e-9 * np.abs(model.stiffness).max())
+    assert curves[floor][:, 0] == pytest.approx(curves[0.0][:, 0], rel=1e-12)
+    assert curves[floor][:, 1] == pytest.approx(curves[0.0][:, 1], rel=1e-6)

@@ -71,7 +71,8 @@ class SoilProblem:
         return MaterialPoints(self.disc, self.w, self.w_committed,
                               self.kinematics.strain_increment(), region_cells, models,
                               keep_strain=self.kinematics.keeps_strain,
-                              initial_stress=geostatic and self.frame.stress_field(geostatic.stress))
+                              initial_stress=geostatic and self.frame.stress_field(geostatic.stress),
+                              tangent_floor=scene.solver.tangent_floor)
 
     def _newton(self, v):
         """Residual = internal − dead loads − the driven traction (+ the tool's nodal terms)."""

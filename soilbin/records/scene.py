@@ -244,6 +244,11 @@ class Solver(Params):
     linear: LinearSolverKind = param(LinearSolverKind.AUTO,
                                      doc="linear solver: auto, lu, cholesky (LDLT), amg or blr "
                                          "(block low-rank LU)")
+    tangent_floor: float = param(0.0, lo=0.0, hi=1.0,
+                                 doc="fraction of the elastic stiffness added to every soil point's "
+                                     "tangent in Newton's matrix (the residual, so the solution, "
+                                     "unchanged): keeps the matrix regular where a point at a "
+                                     "vertex of its yield surface (zero tangent) holds a node alone")
 
 
 @dataclasses.dataclass(frozen=True)

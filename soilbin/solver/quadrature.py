@@ -35,12 +35,13 @@ class MaterialPoints:
     """Stress, tangent and history at every quadrature point of the local (owned + ghost) cells."""
 
     def __init__(self, disc, w, w_committed, strain_increment, region_cells, models, keep_strain=False,
-                 initial_stress=None):
+                 initial_stress=None, tangent_floor=0.0):
         """``strain_increment``: UFL Mandel vector of the strain increment the models
         integrate; ``region_cells``: region name -> local cell indices; ``models``:
         region name -> model; ``keep_strain``: also hold that increment at the points
         in the Function ``strain`` (the updated Lagrangian forms need it);
-        ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3)."""
+        ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3); ``tangent_floor``:
+        the fraction of each nonlinear model's elastic stiffness added to its tangent."""
         mesh = disc.mesh
         degree = disc.element.quadrature_degree
         points, _ = basix.make_quadrature(basix.cell.string_to_type(disc.element.cell), degree)
@@ -64,6 +65,10 @@ class MaterialPoints:
         if len(np.unique(covered)) != len(self._cells):
             raise ValueError("every cell must belong to exactly one material region")
         self.models = dict(models)
+        # C_tan + ε C_el: the residual reads the stress only, so the floor moves Newton's
+        # matrix and not its solution.
+        self._floor = {name: tangent_floor * model.stiffness for name, model in self.models.items()
+                       if tangent_floor > 0.0 and not model.linear}
         self.index = {name: (np.asarray(cells, dtype=np.int64)[:, None] * self.points_per_cell
                              + np.arange(self.points_per_cell)).ravel()
                       for name, cells in region_cells.items()}
@@ -135,6 +140,8 @@ class MaterialPoints:
                     self._stress[idx] = sigma
                     if not self._tangent_frozen:
                         self._tangent[idx] = tangent
+                        if name in self._floor:
+                            self._tangent[idx] += self._floor[name]
                     self.trial[name] = state
             except ReturnMapError as err:
                 failure = str(err)
