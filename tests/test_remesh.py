@@ -209,6 +209,33 @@ def test_a_soil_folded_onto_itself_is_named_where_gmsh_cannot_fill_it(tmp_path):
                      tmp_path / "folded.msh")
 
 
+def test_a_run_stops_at_the_first_step_where_its_soil_folds_onto_itself(tmp_path):
+    """After every converged step a remeshing 3D run checks that the soil's boundary does not
+    pass through itself (soilbin has no self-contact, gmsh could not fill it): the block as
+    built passes; with one corner of its top pushed down through its bottom, the check says
+    where, as a RemeshError (which ends the run with its steps on disk)."""
+    from types import SimpleNamespace
+
+    from conftest import make_problem
+    from soilbin.remesh.remesher import RemeshError, Remeshing
+    problem = make_problem("block-drucker-prager", *BLOCK_3D)
+    remeshing = Remeshing(problem.scene, tmp_path)
+    step = SimpleNamespace(step=3)
+    remeshing.check_folding(problem, step)
+    mesh = problem.tagged.mesh
+    x = mesh.geometry.x
+    vertices = entities_to_geometry(mesh._mesh, 0, np.arange(len(x), dtype=np.int32)[
+        :mesh.topology.index_map(0).size_local], False).ravel()      # not mid-edge nodes
+    top, bottom = x[:, 2].max(), x[:, 2].min()
+    centre = x[:, :2].mean(axis=0)
+    on_top = vertices[np.isclose(x[vertices, 2], top)]
+    inner = on_top[np.argmin(np.linalg.norm(x[on_top, :2] - centre, axis=1))]
+    x[inner, 2] = bottom - (top - bottom)
+    with pytest.raises(RemeshError, match=r"after step 3 the soil has folded onto itself "
+                                          r"\(no self-contact\), its boundary .* passing through"):
+        remeshing.check_folding(problem, step)
+
+
 def test_a_surface_is_meshed_the_same_way_every_time(tmp_path):
     """The mesh of a surface depends on the surface alone, not on what the process did before
     (gmsh's own createTopology numbered the curves in an order that changed from run to run,

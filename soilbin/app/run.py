@@ -131,6 +131,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     def on_step(record):
         folder.add_step(record)
         remeshed = None
+        if remeshing is not None:
+            remeshing.check_folding(stepped.problem, record)
         if remeshing is not None and remeshing.due(record):   # the step ends on the new mesh
             stepped.problem = remeshing.remesh(stepped.problem, record)
             remeshed = remeshing.reports[-1]

@@ -108,25 +108,12 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path):
         try:
             _generate(3)
         except RuntimeError as err:
-            raise RuntimeError(f"{err}{_folded(surface, boundaries)}") from None
+            folded = surface.folded(boundaries)
+            raise RuntimeError(f"{err}{folded and ': ' + folded}") from None
         check_cells(RuntimeError, "the remesher made", 3, True)
         _write(path)
         return regions, dict(boundaries)
     return distribute(comm, "remesh", model, dimension=3)
-
-
-def _folded(surface, boundaries):
-    """Why gmsh could not fill the surface, where the soil has folded onto itself (its
-    boundary passes through itself, which the soil itself does not feel: no self-contact),
-    or ''."""
-    points, tags = surface.crossings()
-    if len(points) == 0:
-        return ""
-    name = {tag: group for group, tag in boundaries.items()}
-    x, y, z = points[0]
-    a, b = (name.get(int(t), str(t)) for t in tags[0])
-    return (f": the soil has folded onto itself (no self-contact), its boundary {a} passing "
-            f"through {b} at ({x:.4g}, {y:.4g}, {z:.4g}), {len(points)} crossing(s)")
 
 
 def _discrete_model(surface):

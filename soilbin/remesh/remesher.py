@@ -112,6 +112,19 @@ class Remeshing:
         return (quality < self.settings.min_quality
                 or (every > 0 and record.step - self._last >= every))
 
+    def check_folding(self, problem, record):
+        """RemeshError (on every rank) if after this step the three-dimensional soil's boundary
+        passes through itself: past that the soil overlaps itself, and no mesh can be made of
+        it (collective)."""
+        if problem.disc.planar:
+            return
+        surface = gather_surface(problem.tagged)
+        folded = problem.comm.bcast(surface.folded(problem.tagged.boundaries)
+                                     if surface is not None else None, root=0)
+        if folded:
+            raise RemeshError(f"after step {record.step} {folded}: the run stops at the first "
+                              "step where it does")
+
     def remesh(self, problem, record):
         """The problem on a new mesh of the deformed soil, in equilibrium at ``record``'s load
         factor; RemeshError (on every rank) if that cannot be done."""

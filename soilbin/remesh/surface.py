@@ -118,26 +118,34 @@ class Surface:
                     for patch in range(patch_of.max() + 1)]
         return Borders(np.array(sorted(corners), dtype=int), curves, bounding)
 
-    def crossings(self, chunk=256):
+    def crossings(self):
         """Where an edge of the surface passes through a triangle it does not touch (a soil
         folded onto itself: soilbin has no self-contact): the points (k, 3) and the tags of
         the edge's triangle and of the triangle crossed (k, 2)."""
         corners = self.points[self.triangles]
-        lo, hi = corners.min(axis=1), corners.max(axis=1)
+        a, b = _overlapping_boxes(corners.min(axis=1), corners.max(axis=1))
+        a, b = np.concatenate([a, b]), np.concatenate([b, a])
+        apart = ~(self.triangles[a, :, None] == self.triangles[b, None, :]).any(axis=(1, 2))
+        a, b = a[apart], b[apart]
         points, tags = [], []
-        for start in range(0, len(corners), chunk):
-            rows = slice(start, start + chunk)
-            near = ((lo[rows, None] <= hi[None]) & (lo[None] <= hi[rows, None])).all(axis=2)
-            apart = ~(self.triangles[rows, None, :, None]
-                      == self.triangles[None, :, None, :]).any(axis=(2, 3))
-            for a, b in zip(*np.nonzero(near & apart)):
-                a += start
-                for k in range(3):
-                    point = _through(corners[a, k], corners[a, (k + 1) % 3], corners[b])
-                    if point is not None:
-                        points.append(point)
-                        tags.append((self.tags[a], self.tags[b]))
-        return np.reshape(points, (-1, 3)), np.reshape(tags, (-1, 2)).astype(int)
+        for k in range(3):
+            x, through = _through(corners[a, k], corners[a, (k + 1) % 3], corners[b])
+            points.append(x[through])
+            tags.append(np.column_stack([self.tags[a], self.tags[b]])[through])
+        return np.concatenate(points), np.concatenate(tags).astype(int)
+
+    def folded(self, boundaries):
+        """Where the soil has folded onto itself (its boundary passes through itself, which
+        the soil does not feel: no self-contact), in words, or '' (``boundaries``: group name
+        -> tag)."""
+        points, tags = self.crossings()
+        if len(points) == 0:
+            return ""
+        name = {tag: group for group, tag in boundaries.items()}
+        x, y, z = points[0]
+        a, b = (name.get(int(t), str(t)) for t in tags[0])
+        return (f"the soil has folded onto itself (no self-contact), its boundary {a} passing "
+                f"through {b} at ({x:.4g}, {y:.4g}, {z:.4g}), {len(points)} crossing(s)")
 
     def on_grid(self, grain):
         """The surface with its points rounded to a grid of ``grain``."""
@@ -170,17 +178,34 @@ def edges_of(triangles):
     return np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
 
 
+def _overlapping_boxes(lo, hi):
+    """The pairs (a, b), a before b in x, of boxes (lo, hi) (n, 3) that overlap: sweep and
+    prune along x."""
+    order = np.argsort(lo[:, 0], kind="stable")
+    start = np.arange(1, len(order) + 1)
+    stop = np.searchsorted(lo[order, 0], hi[order, 0], side="right")
+    count = np.maximum(stop - start, 0)
+    first = np.repeat(np.arange(len(order)), count)
+    second = np.repeat(start - np.cumsum(count) + count, count) + np.arange(count.sum())
+    a, b = order[first], order[second]
+    overlap = ((lo[a] <= hi[b]) & (lo[b] <= hi[a])).all(axis=1)
+    return a[overlap], b[overlap]
+
+
 def _through(p, q, triangle):
-    """The point where the segment pq passes through the inside of ``triangle`` (3, 3), or
-    None."""
-    a, b, c = triangle
+    """Where each segment p q (n, 3) passes through the plane of its ``triangle`` (n, 3, 3)
+    (n, 3), and whether that point is inside the triangle (n,)."""
+    a, b, c = triangle.transpose(1, 0, 2)
     normal = np.cross(b - a, c - a)
-    above_p, above_q = np.dot(p - a, normal), np.dot(q - a, normal)
-    if above_p * above_q >= 0.0:
-        return None
-    x = p + above_p / (above_p - above_q) * (q - p)
-    inside = all(np.dot(np.cross(v - u, x - u), normal) > 0.0 for u, v in ((a, b), (b, c), (c, a)))
-    return x if inside else None
+    above_p = np.einsum("ij,ij->i", p - a, normal)
+    above_q = np.einsum("ij,ij->i", q - a, normal)
+    across = above_p * above_q < 0.0
+    share = np.divide(above_p, above_p - above_q, out=np.zeros_like(above_p), where=across)
+    x = p + share[:, None] * (q - p)
+    inside = across
+    for u, v in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("ij,ij->i", np.cross(v - u, x - u), normal) > 0.0
+    return x, inside
 
 
 def _junctions(edge, pair):
