@@ -13,7 +13,6 @@ import pytest
 
 from conftest import central_differences
 
-from soilbin.errors import ReturnMapError
 from soilbin.models import DiMaggioSandler, ModifiedCap
 from soilbin.models.cap import SECTION_VII5, CapHardening
 from soilbin.tensors import IDENTITY, SQRT2, deviator, trace
@@ -135,9 +134,18 @@ def test_shallow_point_along_a_tool_path(model, hardening):
         assert (np.diff(L[31:]) == 0.0).all()
 
 
-def test_compaction_beyond_the_soil_limit_is_an_error():
-    """A step that asks for more plastic compaction than the soil has (W): a typed
-    error (the step is cut), not a NaN."""
-    deps = np.array([-1e6 / 3.0 * IDENTITY + 1e15 * unit(7)])
-    with pytest.raises(ReturnMapError, match="DiMaggioSandler"):
-        SANDLER.update(deps, SANDLER.initial_state(1))
+@pytest.mark.parametrize("shear", [0.0, 1e15])
+def test_compression_beyond_the_soil_limit_locks_it_up(shear):
+    """A step that compresses the soil far beyond its plastic compaction W (a volumetric
+    strain of -1e6), with or without a huge shear: the cap takes all of W and the rest is
+    elastic, p = K (1e6 - W), on the cap (hydrostatic) or at its corner with the failure
+    surface, which the cap's centre has moved to (the shear): finite, not a NaN."""
+    deps = np.array([-1e6 / 3.0 * IDENTITY + shear * unit(7)])
+    sigma, tangent, state = SANDLER.update(deps, SANDLER.initial_state(1))
+    assert state["yield_state"][0] == (S_CAP_CORNER if shear else S_CAP)
+    # to the rounding of the strain of 1e6 it is split from (1e6 x 1e-16)
+    assert state["eps_p_vol"][0] == pytest.approx(-SANDLER.W, abs=1e-9)
+    # the trial's mean stress carries the rounding of the shear's 1e15 G (300 psi)
+    assert -trace(sigma[0]) / 3.0 == pytest.approx(SANDLER.K * (1e6 - SANDLER.W),
+                                                   rel=1e-7 if shear else 1e-12)
+    assert np.isfinite(tangent).all()

@@ -105,7 +105,9 @@ Regions of the trial state (I1_tr, J_tr), with L = L_n (the failure surface
 is fixed; the cap's normal at its corner (L, F(L)) is purely deviatoric; the
 failure surface's "normal" is the return direction along its potential)::
 
-    cap         I1_tr > L and f_C > 0            local Newton (p, J, dgamma, kappa)
+    cap         I1_tr > L and f_C > 0            local Newton (p, J, dgamma, kappa);
+                where it has no root (the trial above the corner of a cap that can
+                hardly harden any more), the cap corner (L, F(L)), L moving ahead
     cap corner  I1_tr <= L, beyond the failure return at L      (L, F(L)), L moving
                 back with the dilation (a bracketed root; fixed with cap_compaction)
     failure     between the corners' normal cones              scalar root in p,
@@ -269,6 +271,24 @@ def corner_return(prm, p_n, de_v, kappa_n):
 
 
 @kernel
+def advancing_corner(prm, p_n, de_v, kappa_n, L_n, I1_tr, J_tr):
+    """The stress at the corner (L, F(L)) of an advancing cap where its smooth part has no
+    return (module doc, *Regions*): the cap's normal at its corner is deviatoric, and a cap
+    whose compaction has nearly reached W (5e-7 short of it, dH/dL ~ 3e-8 per psi, at
+    L = 202 psi on the tine's soil) can only move by a corner return. The centre L is the
+    root of the corner's volumetric split g(L) = E(L/3; p_n) - de_v + H(L) - H(kappa_n)
+    (:func:`corner_equation`) on [L_n, I1_tr]: g <= 0 at L_n (the trial is past it), >= 0
+    at I1_tr (the elastic part alone reaches it). A solution only where the trial's J is
+    at least F(L), the deviatoric flow outward. Returns as :func:`corner_return`."""
+    args = (prm, p_n, de_v, cap_compaction(prm, kappa_n)[0])
+    kappa, converged = corner_root(args, L_n, I1_tr, math.nan)
+    F, dF, _ = cap_failure(prm, kappa)
+    L_e = 1.0 / corner_equation(kappa, args)[1]
+    converged = converged and corner_equation(L_n, args)[0] <= 0.0 and F <= J_tr
+    return kappa, kappa / 3.0, F, (L_e / 3.0, 0.0, dF * L_e, 0.0), CAP_CORNER, converged
+
+
+@kernel
 def warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L):
     """(p, J, dgamma, kappa) of the cap return from a ``guess`` state on a free cap: its
     stress and cap centre, and the multiplier that best splits this step's strain along
@@ -355,8 +375,11 @@ def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settin
         if last == CAP and guess_L > L_min:
             x0 = warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L)
         p, J, _, kappa, sens, ok = smooth_return(prm, lp, s_n, s_tr, x0, cold, settings)
-        converged = converged and ok
         code = CAP
+        if not ok:
+            kappa, p, J, sens, code, ok = advancing_corner(prm, p_n, de_v, kappa_n, L_n,
+                                                           3.0 * p_tr, J_tr)
+        converged = converged and ok
     if volumetric and (corner or cut or fail or cap_corner):
         # The cap follows the plastic volumetric strain back (B.11); where its centre
         # L = max(kappa, L_min) would pass the stress (I1 > L), and beyond the failure
@@ -655,6 +678,17 @@ def retreating_samples(cls):
             for mode, p, deps, X, code, etas in cases for eta in etas]
 
 
+def saturated_samples(table):
+    """A cap that can hardly harden any more (its initial end X0 = 257.68 psi in the tine's
+    soil: its compaction 5e-7 short of W, as ahead of the blade after 5 in of travel), the
+    trial just above its corner: the advancing corner (:func:`advancing_corner`), with
+    either hardening."""
+    return [Sample(f"cap corner ahead of a saturated cap, {hardening.value}",
+                   {**table, "X0": 257.68, "hardening": hardening.value}, -67.0 * IDENTITY,
+                   0.014 * SHEAR - 3e-4 * IDENTITY, CAP_CORNER)
+            for hardening in CapHardening]
+
+
 @dataclasses.dataclass(frozen=True)
 class DiMaggioSandler(CapModel):
     """DiMaggio–Sandler cap: F(I1) = A - C exp(-beta I1) (eq. B.9; module doc)."""
@@ -684,4 +718,5 @@ class ModifiedCap(CapModel):
     @classmethod
     def conformance_samples(cls):
         table = {**SECTION_VII5, "X0": 20.0}
-        return cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 0.5})
+        return (cap_samples(table, {**table, "A": 8.0, "tension_cutoff": 0.5})
+                + saturated_samples(table))
