@@ -195,8 +195,10 @@ def test_a_soil_folded_onto_itself_is_named_where_gmsh_cannot_fill_it(tmp_path):
     from mpi4py import MPI
     from soilbin.remesh.mesher import mesh_surface
     corners, tags = refined_box_surface(4)
-    middle = (corners == [0.5, 0.5, 1.0]).all(axis=2)
-    corners[middle] = [0.5, 0.5, -0.5]     # the top's middle pushed down through the bottom
+    for x in (0.25, 0.5, 0.75):          # the top's middle pushed down through the bottom
+        for y in (0.25, 0.5, 0.75):
+            middle = (corners == [x, y, 1.0]).all(axis=2)
+            corners[middle] = [x, y, -0.5]
     surface = Surface.of(corners, tags)
     points, crossed = surface.crossings()
     assert len(points) > 0 and np.allclose(points[:, 2], 0.0)
@@ -207,6 +209,26 @@ def test_a_soil_folded_onto_itself_is_named_where_gmsh_cannot_fill_it(tmp_path):
         mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1},
                      {"bottom": 5, "top": 6, **{f"face{k}": k for k in range(1, 5)}},
                      tmp_path / "folded.msh")
+
+
+def test_a_crumple_of_the_surface_joins_a_larger_patch_of_its_group():
+    """A patch of at most CRUMPLE triangles folded past the crease (the heave beside the blade
+    after 4 in: gmsh's fresh mesh of the patch around overlapped it) joins its widest larger
+    neighbour of the same group; a cube's faces of two triangles each stay six patches."""
+    from soilbin.remesh.surface import CRUMPLE
+    corners, tags = refined_box_surface(4)
+    # one triangle of the top next to its border tented up steeply: three patches of one
+    # triangle, one of which borders the side and its two neighbours only
+    top = np.flatnonzero(tags == 6)[0]
+    a, b, c = corners[top]
+    apex = (a + b + c) / 3.0 + [0.0, 0.0, 0.3]
+    tent = np.array([[a, b, apex], [b, c, apex], [c, a, apex]])
+    corners = np.concatenate([np.delete(corners, top, axis=0), tent])
+    tags = np.concatenate([np.delete(tags, top), [6, 6, 6]])
+    surface = Surface.of(corners, tags)
+    patch_of = surface.patches(np.radians(40.0))
+    assert len(np.unique(patch_of)) == 6 and 3 <= CRUMPLE
+    assert len(np.unique(patch_of[surface.tags == 6])) == 1
 
 
 def test_a_run_stops_at_the_first_step_where_its_soil_folds_onto_itself(tmp_path):

@@ -13,6 +13,8 @@ from .outline import OutlineError
 
 #: The times a patch that is not a topological disc is cut again (:meth:`Surface.patches`).
 MAX_CUTS = 4
+#: A patch of at most this many triangles joins a neighbour of its group (:meth:`Surface.patches`).
+CRUMPLE = 3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,7 +57,11 @@ class Surface:
         and a patch that is then not a topological disc (gmsh maps each patch onto a plane)
         cut again, through a hole, up to :data:`MAX_CUTS` times: the tine's soil after 4 in
         had a triangle of the free surface folded past the crease by the heave, one corner on
-        the tool, and the patch around it passed twice through that corner."""
+        the tool, and the patch around it passed twice through that corner. Before that, a
+        crumple (a patch of at most :data:`CRUMPLE` triangles, folded past the crease from its
+        neighbours) joins a larger neighbouring patch of its group: the heave beside the blade
+        after 4 in crumpled into patches of 1, 2 and 3 triangles, and gmsh's fresh mesh of
+        the patch around one of them overlapped it."""
         a, b, c = (self.points[self.triangles[:, k]] for k in range(3))
         normal = np.cross(b - a, c - a)
         normal /= np.linalg.norm(normal, axis=1, keepdims=True)
@@ -69,6 +75,9 @@ class Surface:
             graph = coo_matrix((np.ones(keep.sum()), (first[keep], second[keep])), shape=(m, m))
             return connected_components(graph, directed=False)[1]
         patch_of = joined(np.zeros(m, dtype=int))
+        while (crumpled := self._crumpled(patch_of, first, second) & ~smooth).any():
+            smooth |= crumpled
+            patch_of = joined(np.zeros(m, dtype=int))
         for _ in range(MAX_CUTS):
             holed = np.flatnonzero(euler_characteristic(self.triangles, patch_of) != 1)
             if len(holed) == 0:
@@ -79,6 +88,24 @@ class Surface:
                 piece[beyond] = piece.max() + 1
             patch_of = joined(piece)
         return patch_of
+
+    def _crumpled(self, patch_of, first, second):
+        """The edges (a mask over ``first``, ``second``: the triangles on either side of each
+        edge) across which each crumple (a patch of at most :data:`CRUMPLE` triangles) joins
+        the larger patch of its group it shares most edges with (a cube's faces of two
+        triangles each stay apart)."""
+        across = (patch_of[first] != patch_of[second]) & (self.tags[first] == self.tags[second])
+        a, b = patch_of[first][across], patch_of[second][across]
+        pairs, shared = np.unique(np.column_stack([np.concatenate([a, b]), np.concatenate([b, a])]),
+                                  axis=0, return_counts=True)
+        size = np.bincount(patch_of)
+        into = (size[pairs[:, 0]] <= CRUMPLE) & (size[pairs[:, 1]] > size[pairs[:, 0]])
+        pairs, shared = pairs[into], shared[into]
+        pairs = pairs[np.lexsort((-shared, pairs[:, 0]))]   # per crumple, its widest first
+        joins = pairs[np.r_[True, pairs[1:, 0] != pairs[:-1, 0]]] if len(pairs) else pairs
+        key = np.sort(joins, axis=1)
+        edge = np.sort(np.column_stack([patch_of[first], patch_of[second]]), axis=1)
+        return across & (edge[:, None, :] == key[None]).all(axis=2).any(axis=1)
 
     def _beyond_a_hole(self, inside):
         """The triangles of the patch ``inside`` (a mask) on one side of a plane across its
