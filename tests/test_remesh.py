@@ -426,6 +426,49 @@ def test_a_re_equilibration_that_fails_goes_in_stages_to_the_same_equilibrium(tm
         assert mine["force"] == pytest.approx(theirs["force"], rel=1e-5)
 
 
+def test_a_re_equilibration_failing_in_stages_is_tried_again_on_a_floored_matrix(tmp_path,
+                                                                                monkeypatch):
+    """Where Newton fails from the transferred state and in stages too, both are tried again
+    with Newton's matrix floored at EQUILIBRIUM_FLOOR of the elastic stiffness: the same
+    equilibrium (the floor leaves the residual alone), and the scene's floor after it."""
+    from soilbin.remesh import remesher
+    scene = load_scene(SCENES / "strip-footing-penetration.toml", FOOTING)
+    run_scene(scene, tmp_path / "direct")
+    equilibrated = remesher._equilibrated
+    floors = []
+
+    def floored_only(problem):
+        solve = problem.solve
+
+        def solve_if_floored():
+            floors.append(problem.points.tangent_floor)
+            if problem.points.tangent_floor < remesher.EQUILIBRIUM_FLOOR:
+                raise ConvergenceError("a test's failure")
+            return solve()
+        problem.solve = solve_if_floored
+        try:
+            return equilibrated(problem)
+        finally:
+            problem.solve = solve
+            assert problem.points.tangent_floor == 0.0
+    monkeypatch.setattr(remesher, "_equilibrated", floored_only)
+    run_scene(scene, tmp_path / "floored")
+    assert floors[:3] == [0.0, 0.0, remesher.EQUILIBRIUM_FLOOR]   # direct, a stage, floored
+    reports = []
+    for run in ("direct", "floored"):
+        with open(tmp_path / run / "remeshes.csv") as f:
+            reports.append(list(csv.DictReader(f)))
+    # the first remesh's equilibrium and the step after it; then the floored tangent that step
+    # started from took other iterations, and the step rule other steps
+    direct, floored = (report[0] for report in reports)
+    assert float(floored["residual_equilibrated"]) <= 1e-6
+    assert float(floored["force_after"]) == pytest.approx(float(direct["force_after"]), rel=1e-6)
+    after = int(direct["step"]) + 1
+    for mine, theirs in zip(curve(tmp_path / "floored")[:after], curve(tmp_path / "direct")[:after]):
+        assert mine["load_factor"] == theirs["load_factor"]
+        assert mine["force"] == pytest.approx(theirs["force"], rel=1e-5)
+
+
 def test_a_remeshed_soil_against_a_rough_wall_keeps_its_contact(tmp_path):
     """The rough wall pushed 0.05 in into Drucker–Prager sand in large deformation, remeshed
     every 3 steps: the interface's state moves with the soil (the tool's normals, the slip,

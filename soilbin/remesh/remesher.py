@@ -45,6 +45,9 @@ from .transfer import OldCells, cell_simplices
 GRAIN = 1e-9
 #: Stages of a re-equilibration that did not converge in one (:func:`_equilibrated`).
 RELEASE_STAGES = 4
+#: The tangent floor (``solver.tangent_floor``) of a re-equilibration tried again
+#: (:func:`_equilibrated`).
+EQUILIBRIUM_FLOOR = 1e-2
 #: The run folder's folder of the meshes that remeshing made.
 MESHES = "meshes"
 
@@ -262,12 +265,33 @@ def _equilibrated(problem):
     """Newton at the load factor from the transferred state; where it fails, the transfer's
     out-of-balance R_0 is released in :data:`RELEASE_STAGES` equal parts (R = (1 − k/n) R_0,
     k = 1 … n, each stage from the last one's solution; the committed history is the
-    transferred one throughout). Returns a NewtonResult (the stages' iterations, the first
-    and last residual); ConvergenceError if a stage fails."""
+    transferred one throughout); where that fails too, both again with Newton's matrix
+    floored at :data:`EQUILIBRIUM_FLOOR` of the elastic stiffness (the same equilibrium: a
+    remeshed soil at 4.3 in of the tine's travel was too soft in places for the scene's
+    1e-3). Returns a NewtonResult (the iterations of the attempts that converged, the first
+    and last residual); ConvergenceError if every attempt fails."""
+    points = problem.points
+    scene_floor = points.tangent_floor
     try:
-        return problem.solve()
-    except ConvergenceError:
-        problem.roll_back()
+        for floor in sorted({scene_floor, max(scene_floor, EQUILIBRIUM_FLOOR)}):
+            points.floor_tangent(floor)
+            try:
+                return problem.solve()
+            except ConvergenceError:
+                problem.roll_back()
+            try:
+                return _released(problem)
+            except ConvergenceError as err:
+                problem.roll_back()
+                failure = err
+        raise failure
+    finally:
+        points.floor_tangent(scene_floor)
+
+
+def _released(problem):
+    """The transfer's out-of-balance released in :data:`RELEASE_STAGES` stages (one solve
+    each); a NewtonResult of their iterations, the first and the last residual."""
     newton, iterations = problem.newton, 0
     try:
         first = newton.hold_out_of_balance(1.0 - 1.0 / RELEASE_STAGES)

@@ -65,10 +65,7 @@ class MaterialPoints:
         if len(np.unique(covered)) != len(self._cells):
             raise ValueError("every cell must belong to exactly one material region")
         self.models = dict(models)
-        # C_tan + ε C_el: the residual reads the stress only, so the floor moves Newton's
-        # matrix and not its solution.
-        self._floor = {name: tangent_floor * model.stiffness for name, model in self.models.items()
-                       if tangent_floor > 0.0 and not model.linear}
+        self.floor_tangent(tangent_floor)
         self.index = {name: (np.asarray(cells, dtype=np.int64)[:, None] * self.points_per_cell
                              + np.arange(self.points_per_cell)).ravel()
                       for name, cells in region_cells.items()}
@@ -89,6 +86,14 @@ class MaterialPoints:
         self._converged_tangent = None
         self.update()   # zero increment: the initial stress and the elastic tangent
         self._converged_tangent = self._tangent.copy()
+
+    def floor_tangent(self, eps):
+        """From the next update on, C_tan + eps C_el at every point of a nonlinear model: the
+        residual reads the stress only, so the floor moves Newton's matrix and not its
+        solution."""
+        self.tangent_floor = eps
+        self._floor = {name: eps * model.stiffness for name, model in self.models.items()
+                       if eps > 0.0 and not model.linear}
 
     def _values(self, function, shape):
         """The per-point values (n_points, *shape) of a quadrature Function in evaluation
