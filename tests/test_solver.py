@@ -187,3 +187,9 @@ def test_the_tangent_floor_moves_newtons_matrix_and_not_its_solution():
     assert np.allclose(lifted, floor * model.stiffness, rtol=1e-6, atol=1e-9 * np.abs(model.stiffness).max())
     assert curves[floor][:, 0] == pytest.approx(curves[0.0][:, 0], rel=1e-12)
     assert curves[floor][:, 1] == pytest.approx(curves[0.0][:, 1], rel=1e-6)
+    # raised during a run (a remesh's re-equilibration), the floor lifts the last converged
+    # tangent too, which the next step's first iterate takes
+    converged = problem.points._converged_tangent.copy()
+    problem.points.floor_tangent(3 * floor)
+    assert np.allclose(problem.points._converged_tangent - converged, 2 * floor * model.stiffness,
+                       rtol=1e-6, atol=1e-9 * np.abs(model.stiffness).max())

@@ -88,12 +88,17 @@ class MaterialPoints:
         self._converged_tangent = self._tangent.copy()
 
     def floor_tangent(self, eps):
-        """From the next update on, C_tan + eps C_el at every point of a nonlinear model: the
-        residual reads the stress only, so the floor moves Newton's matrix and not its
-        solution."""
+        """C_tan + eps C_el at every point of a nonlinear model, from the next update on and
+        in the last converged tangent (a step's first iterate): the residual reads the stress
+        only, so the floor moves Newton's matrix and not its solution."""
+        change = eps - getattr(self, "tangent_floor", 0.0)
         self.tangent_floor = eps
         self._floor = {name: eps * model.stiffness for name, model in self.models.items()
                        if eps > 0.0 and not model.linear}
+        if getattr(self, "_converged_tangent", None) is not None:
+            for name, idx in self.index.items():
+                if not self.models[name].linear:
+                    self._converged_tangent[idx] += change * self.models[name].stiffness
 
     def _values(self, function, shape):
         """The per-point values (n_points, *shape) of a quadrature Function in evaluation
