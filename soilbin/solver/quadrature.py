@@ -65,7 +65,6 @@ class MaterialPoints:
         if len(np.unique(covered)) != len(self._cells):
             raise ValueError("every cell must belong to exactly one material region")
         self.models = dict(models)
-        self.floor_tangent(tangent_floor)
         self.index = {name: (np.asarray(cells, dtype=np.int64)[:, None] * self.points_per_cell
                              + np.arange(self.points_per_cell)).ravel()
                       for name, cells in region_cells.items()}
@@ -84,6 +83,8 @@ class MaterialPoints:
         self._tangent = self._values(self.tangent, (6, 6))
         self._tangent_frozen = False
         self._converged_tangent = None
+        self.tangent_floor = 0.0
+        self.floor_tangent(tangent_floor)
         self.update()   # zero increment: the initial stress and the elastic tangent
         self._converged_tangent = self._tangent.copy()
 
@@ -91,11 +92,10 @@ class MaterialPoints:
         """C_tan + eps C_el at every point of a nonlinear model, from the next update on and
         in the last converged tangent (a step's first iterate): the residual reads the stress
         only, so the floor moves Newton's matrix and not its solution."""
-        change = eps - getattr(self, "tangent_floor", 0.0)
-        self.tangent_floor = eps
+        change, self.tangent_floor = eps - self.tangent_floor, eps
         self._floor = {name: eps * model.stiffness for name, model in self.models.items()
                        if eps > 0.0 and not model.linear}
-        if getattr(self, "_converged_tangent", None) is not None:
+        if self._converged_tangent is not None:
             for name, idx in self.index.items():
                 if not self.models[name].linear:
                     self._converged_tangent[idx] += change * self.models[name].stiffness
@@ -149,9 +149,8 @@ class MaterialPoints:
                         deps[idx], self.committed[name], guess=self.trial[name])
                     self._stress[idx] = sigma
                     if not self._tangent_frozen:
-                        self._tangent[idx] = tangent
-                        if name in self._floor:
-                            self._tangent[idx] += self._floor[name]
+                        self._tangent[idx] = (tangent + self._floor[name] if name in self._floor
+                                              else tangent)
                     self.trial[name] = state
             except ReturnMapError as err:
                 failure = str(err)
