@@ -44,7 +44,8 @@ _libraries = {}  # module name -> ctypes.CDLL (never unloaded, like extension mo
 _dolfinx_jit = dolfinx.jit.ffcx_jit
 
 
-def _ffi(scalar_type):
+def ufcx_ffi(scalar_type):
+    """The cffi FFI (ABI mode) declaring the UFCx types of ``scalar_type``."""
     if scalar_type not in _ffis:
         ffi = cffi.FFI()
         j = ffcx_jit_module
@@ -113,7 +114,7 @@ def _local_jit(ufl_object, form_compiler_params={}, jit_params={}):
             code = (None, body)
         _libraries[module_name] = ctypes.CDLL(str(library))
     lib = _libraries[module_name]
-    ffi = _ffi(p["scalar_type"])
+    ffi = ufcx_ffi(p["scalar_type"])
     objects = [ffi.cast(f"{ctype} *", ctypes.addressof(ctypes.c_char.in_dll(lib, name)))[0]
                for (ctype, _), name in zip(symbols, names)]
     module = types.SimpleNamespace(__name__=module_name, ffi=ffi, lib=lib)

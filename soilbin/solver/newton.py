@@ -34,6 +34,7 @@ import dolfinx.fem.petsc  # noqa: F401  (registers fem.petsc)
 
 from ..errors import ConvergenceError, ReturnMapError
 from ..records.scene import LineSearch
+from .assembly import ElementAssembler
 from .linear_solver import LinearSolver, LinearSolveError
 
 
@@ -102,6 +103,7 @@ class NewtonSolver:
         self._opts = options
         self._b = fem.petsc.create_vector(self._L)
         self.matrix = fem.petsc.create_matrix(self._a)
+        self._assembler = ElementAssembler(self._a, w.function_space, bcs, self.matrix)
         self._dx = w.vector.duplicate()
         self._gap = w.vector.duplicate()
         self._force_scale = 0.0
@@ -179,10 +181,7 @@ class NewtonSolver:
 
     def jacobian(self, A):
         """Assemble the Jacobian at the current iterate (after :meth:`residual`) into ``A``."""
-        A.zeroEntries()
-        fem.petsc.assemble_matrix(A, self._a, bcs=self._bcs)
-        if self._nodal_terms:   # the BC diagonal was inserted: flush before adding
-            A.assemble(PETSc.Mat.AssemblyType.FLUSH)
+        self._assembler.assemble(A)
         for term in self._nodal_terms:
             term.add_jacobian(A)
         A.assemble()
