@@ -57,8 +57,10 @@ def blocks_symmetric(blocks, rtol, atol):
     ``np.allclose(B, B.T, rtol, atol * max|B|)``, stopping at the first that is not (a
     non-associated or slipping point's tangent is met early)."""
     scale = 0.0
-    for value in blocks.ravel():
-        scale = max(scale, abs(value))
+    for b in range(blocks.shape[0]):
+        for i in range(blocks.shape[1]):
+            for j in range(blocks.shape[2]):
+                scale = max(scale, abs(blocks[b, i, j]))
     atol = atol * scale
     for b in range(blocks.shape[0]):
         for i in range(blocks.shape[1]):

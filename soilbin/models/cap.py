@@ -405,10 +405,10 @@ def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settin
 
 @kernel
 def cap_update(prm, deps, stress, L_n, X_n, last, guess_stress, guess_L, settings,
-               sigma, C, L, X, compaction, eq, code):
-    """:func:`cap_point` at every point; returns the number of points whose local solve
-    did not converge."""
-    s_n, s_tr, n = np.empty(6), np.empty(6), np.empty(6)
+               sigma, C, L, X, compaction, eq, code, scratch):
+    """:func:`cap_point` at every point (``scratch`` (3, 6)); returns the number of points
+    whose local solve did not converge."""
+    s_n, s_tr, n = scratch[0], scratch[1], scratch[2]
     failed = 0
     for i in range(deps.shape[0]):
         L[i], X[i], compaction[i], eq[i], code[i], ok = cap_point(
@@ -445,6 +445,32 @@ def cap_through(prm, I1, J, L, height):
                 L[i] = I1[i]
 
 
+
+
+@kernel
+def cap_failure_at(prm, I1, out):
+    """:func:`cap_failure` at every I1, into the columns of out (n, 3)."""
+    for i in range(I1.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = cap_failure(prm, I1[i])
+
+
+@kernel
+def cap_compaction_at(prm, L, out):
+    """:func:`cap_compaction` at every L, into the columns of out (n, 2)."""
+    for i in range(L.shape[0]):
+        out[i, 0], out[i, 1] = cap_compaction(prm, L[i])
+
+
+def at_every(function_at, prm, x, n_values):
+    """The ``n_values`` values of a point function at a number (a tuple of numbers) or at
+    every entry of an array (a tuple of arrays of its shape), through its compiled loop
+    ``function_at(prm, x, out)``."""
+    x = np.asarray(x, dtype=float)
+    out = np.empty((x.size, n_values))
+    function_at(prm, np.ascontiguousarray(x.ravel()), out)
+    if x.ndim == 0:
+        return tuple(out[0])
+    return tuple(column.reshape(x.shape) for column in out.T)
 
 
 @kernel
@@ -536,10 +562,7 @@ class CapModel(IsotropicElasticity):
 
     def failure(self, I1):
         """(F, F', F'') of the failure surface sqrt(J2) = F(I1), I1 compression positive."""
-        I1 = np.asarray(I1, dtype=float)
-        if I1.ndim == 0:
-            return tuple(np.float64(v) for v in cap_failure(self.prm, float(I1)))
-        return cap_failure(self.prm, np.ascontiguousarray(I1))
+        return at_every(cap_failure_at, self.prm, I1, 3)
 
     @property
     def apex(self):
@@ -570,10 +593,7 @@ class CapModel(IsotropicElasticity):
 
     def compaction(self, L):
         """(H, dH/dL): the plastic compaction W (1 - exp(-D X(L))) of the cap at L (B.11)."""
-        L = np.asarray(L, dtype=float)
-        if L.ndim == 0:
-            return tuple(np.float64(v) for v in cap_compaction(self.prm, float(L)))
-        return cap_compaction(self.prm, np.ascontiguousarray(L))
+        return at_every(cap_compaction_at, self.prm, L, 2)
 
     # --- driver interface ----------------------------------------------------------------
 
@@ -610,7 +630,7 @@ class CapModel(IsotropicElasticity):
         failed = cap_update(self.prm, np.ascontiguousarray(deps), state["stress"],
                             state["cap_L"], state["cap_X"], last, guess["stress"],
                             guess["cap_L"], local_settings(), sigma, C, L, X, compaction, eq,
-                            code)
+                            code, np.empty((3, 6)))
         check_converged(self, failed, m)
         new_state = {"stress": sigma, "cap_L": L, "cap_X": X,
                      "eps_p_vol": state["eps_p_vol"] - compaction,

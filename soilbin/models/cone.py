@@ -217,12 +217,12 @@ def equivalent_plastic_strain(K, G, deps, stress_n, sigma):
 # --- every point ----------------------------------------------------------------------------
 
 @kernel
-def cone_update(prm, deps, stress_n, eps_p_eq_n, sigma, C, eps_p_eq, yield_state):
+def cone_update(prm, deps, stress_n, eps_p_eq_n, sigma, C, eps_p_eq, yield_state, scratch):
     """:func:`return_map` at every point from the committed stress_n; sigma holds the
     trial stresses and gets the returned ones. Writes C and the history, eps_p_eq (grown
-    by :func:`equivalent_plastic_strain` where plastic) and yield_state."""
+    by :func:`equivalent_plastic_strain` where plastic) and yield_state; ``scratch`` (2, 6)."""
     K, G = prm[0], prm[1]
-    s, n = np.empty(6), np.empty(6)
+    s, n = scratch[0], scratch[1]
     for i in range(deps.shape[0]):
         p_tr, J_tr = trial_invariants(sigma[i], s, n)
         code = return_map(prm, p_tr, J_tr, s, n, sigma[i], C[i])
@@ -282,5 +282,5 @@ class ConeModel(IsotropicElasticity):
         sigma = self.trial(deps, stress_n)   # the elastic predictor, returned in place
         C, eps_p_eq, yield_state = np.empty((m, 6, 6)), np.empty(m), np.empty(m)
         cone_update(self.prm, deps, stress_n, np.ascontiguousarray(state["eps_p_eq"]), sigma,
-                    C, eps_p_eq, yield_state)
+                    C, eps_p_eq, yield_state, np.empty((2, 6)))
         return sigma, C, {"stress": sigma, "eps_p_eq": eps_p_eq, "yield_state": yield_state}

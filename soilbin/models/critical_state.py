@@ -228,10 +228,10 @@ def critical_state_point(prm, deps, stress_n, pc_n, settings, sigma, C, s_n, s_t
 
 @kernel
 def critical_state_update(prm, deps, stress, pc_n, settings, sigma, C, p_c, compaction, eq,
-                          code):
-    """:func:`critical_state_point` at every point; returns the number of points whose
-    local solve did not converge."""
-    s_n, s_tr, n = np.empty(6), np.empty(6), np.empty(6)
+                          code, scratch):
+    """:func:`critical_state_point` at every point (``scratch`` (3, 6)); returns the
+    number of points whose local solve did not converge."""
+    s_n, s_tr, n = scratch[0], scratch[1], scratch[2]
     failed = 0
     for i in range(deps.shape[0]):
         p_c[i], compaction[i], eq[i], code[i], ok = critical_state_point(
@@ -333,7 +333,7 @@ class CriticalStateModel(IsotropicElasticity):
         p_c, compaction, eq, code = (np.empty(m) for _ in range(4))
         failed = critical_state_update(self.prm, np.ascontiguousarray(deps), state["stress"],
                                        state["p_c"], local_settings(), sigma, C, p_c,
-                                       compaction, eq, code)
+                                       compaction, eq, code, np.empty((3, 6)))
         check_converged(self, failed, m)
         new_state = {"stress": sigma, "p_c": p_c, "eps_p_vol": state["eps_p_vol"] - compaction,
                      "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": code}
