@@ -31,6 +31,13 @@ def quadrature_space(mesh, degree, shape=None):
     return fem.FunctionSpace(mesh, element)
 
 
+def _as_slice(index):
+    """``index`` as the slice it equals if it is a contiguous ascending range, else itself."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index
+
+
 class MaterialPoints:
     """Stress, tangent and history at every quadrature point of the local (owned + ghost) cells."""
 
@@ -68,6 +75,9 @@ class MaterialPoints:
         self.index = {name: (np.asarray(cells, dtype=np.int64)[:, None] * self.points_per_cell
                              + np.arange(self.points_per_cell)).ravel()
                       for name, cells in region_cells.items()}
+        # the update's view of each region: a slice where its points are a contiguous range
+        # (one region: all of them), so that deps[part] and the writes copy no index
+        self._parts = {name: _as_slice(idx) for name, idx in self.index.items()}
         stress0 = None
         if initial_stress is not None:
             x = self.evaluate(self.expression(disc.coordinates()))
@@ -144,13 +154,13 @@ class MaterialPoints:
                 self.write(deps, self.strain)
             failure = ""
             try:
-                for name, idx in self.index.items():
+                for name, part in self._parts.items():
                     sigma, tangent, state = self.models[name].update(
-                        deps[idx], self.committed[name], guess=self.trial[name])
-                    self._stress[idx] = sigma
+                        deps[part], self.committed[name], guess=self.trial[name])
+                    self._stress[part] = sigma
                     if not self._tangent_frozen:
-                        self._tangent[idx] = (tangent + self._floor[name] if name in self._floor
-                                              else tangent)
+                        self._tangent[part] = (tangent + self._floor[name] if name in self._floor
+                                               else tangent)
                     self.trial[name] = state
             except ReturnMapError as err:
                 failure = str(err)
