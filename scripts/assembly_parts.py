@@ -1,8 +1,9 @@
-"""Where the tine's assembly goes, and what the C compiler's flags change: per Jacobian, the
-FFCx cell kernel alone (called cell by cell over the packed coefficients and coordinates)
-and the insertion into PETSc's matrix (the rest of the assembly); the residual vector; and
-the problem's set-up on an empty form cache (its forms compiled), for each set of flags
-given to FFCx's C code.
+"""Where the tine's assembly goes, and what the C compiler's flags change: per Jacobian,
+the coefficients packed by DOLFINx, the element matrices (FFCx's kernels in soilbin's
+compiled loop) and their sum into PETSc's matrix (MatSetValuesCOO), beside DOLFINx's own
+assembler of the same matrix (MatSetValuesLocal per cell); the residual vector; and the
+problem's set-up on an empty form cache (its forms compiled), for each set of flags given
+to FFCx's C code.
 
 Each set of flags runs in its own process with its own empty form cache (a DOLFINx
 ``dolfinx_jit_parameters.json`` in a temporary XDG_CONFIG_HOME), on the default tine's mesh
@@ -37,48 +38,11 @@ def best_ms(action, repeats=REPEATS):
     return 1000.0 * min(times)
 
 
-def cell_kernel_ms(form, mesh):
-    """CPU ms of the form's cell kernel over every cell, without the insertion: the kernel
-    called through cffi on the packed data, less the same loop without the call."""
-    import cffi
-    import numpy as np
-    from dolfinx import cpp
-
-    ufcx = form.ufcx_form
-    if ufcx.num_integrals(0) != 1:
-        raise SystemExit("assembly_parts: the Jacobian must have one cell integral")
-    kernel = ufcx.integrals(0)[0].tabulate_tensor_float64
-    (_, coefficients), = cpp.fem.pack_coefficients(form).items()
-    constants = cpp.fem.pack_constants(form)
-    cells = mesh.topology.index_map(mesh.topology.dim).size_local
-    nodes = mesh.geometry.dofmap.array.reshape(cells, -1)
-    coordinates = np.ascontiguousarray(mesh.geometry.x[nodes])
-    space = form.function_spaces[0]
-    n = space.dofmap.cell_dofs(0).size * space.dofmap.bs
-    element_matrix = np.zeros((n, n))
-    ffi = cffi.FFI()
-    A = ffi.cast("double *", element_matrix.ctypes.data)
-    w = ffi.cast("double *", coefficients.ctypes.data)
-    c = ffi.cast("double *", constants.ctypes.data) if constants.size else ffi.NULL
-    x = ffi.cast("double *", coordinates.ctypes.data)
-    w_stride, x_stride = coefficients.shape[1], coordinates.shape[1] * 3
-
-    def kernels():
-        for cell in range(cells):
-            element_matrix[:] = 0.0
-            kernel(A, w + cell * w_stride, c, x + cell * x_stride, ffi.NULL, ffi.NULL)
-
-    def loop():
-        for cell in range(cells):
-            element_matrix[:] = 0.0
-    return best_ms(kernels) - best_ms(loop), n
-
-
 def measure_here():
     """One flag set's measurements (this process's DOLFINx parameters)."""
     sys.path.insert(0, str(ROOT))
     from mpi4py import MPI
-    from dolfinx import fem
+    from dolfinx import cpp, fem
     import dolfinx.fem.petsc  # noqa: F401
     from soilbin.meshes import scene_mesh
     from soilbin.problem import SoilProblem
@@ -98,10 +62,22 @@ def measure_here():
         with b.localForm() as local:
             local.set(0.0)
         fem.petsc.assemble_vector(b, newton._L)
-    jacobian = best_ms(lambda: newton.jacobian(newton.matrix))
-    kernel, n = cell_kernel_ms(newton._a, problem.mesh)
+
+    def dolfinx_jacobian():
+        A.zeroEntries()
+        fem.petsc.assemble_matrix(A, newton._a, bcs=newton._bcs)
+        A.assemble()
+    assembler, form = newton._assembler, newton._a
+    coefficients, constants = cpp.fem.pack_coefficients(form), cpp.fem.pack_constants(form)
+    A = fem.petsc.create_matrix(form)
     return dict(dofs=problem.n_dofs, cells=tagged.mesh.topology.index_map(3).size_local,
-                element=n, jacobian=jacobian, kernel=kernel, vector=best_ms(vector),
+                element=newton._a.function_spaces[0].dofmap.cell_dofs(0).size,
+                jacobian=best_ms(lambda: newton.jacobian(newton.matrix)),
+                packing=best_ms(lambda: (cpp.fem.pack_coefficients(form),
+                                         cpp.fem.pack_constants(form))),
+                elements=best_ms(lambda: assembler.tabulate(coefficients, constants)),
+                insertion=best_ms(lambda: assembler.insert(newton.matrix)),
+                dolfinx=best_ms(dolfinx_jacobian), vector=best_ms(vector),
                 compile_s=compile_s)
 
 
@@ -126,12 +102,13 @@ def table(results):
     rows = [f"Tine, scene's mesh: {first['dofs']} dofs, {first['cells']} cells, element "
             f"matrix {first['element']} x {first['element']} (CPU ms, best of {REPEATS}; "
             "the problem's set-up with the forms' first compilation in wall s):", "",
-            "| C flags | Jacobian | of it: cell kernel | of it: insertion | residual vector "
-            "| set-up with first compilation |", "| --- | --- | --- | --- | --- | --- |"]
+            "| C flags | Jacobian | of it: packing | of it: element matrices "
+            "| of it: COO sum | DOLFINx's assembler | residual vector "
+            "| set-up with first compilation |", "|" + " --- |" * 8]
     for label, r in results:
-        rows.append(f"| {label} | {r['jacobian']:.1f} | {r['kernel']:.1f} | "
-                    f"{r['jacobian'] - r['kernel']:.1f} | {r['vector']:.1f} | "
-                    f"{r['compile_s']:.1f} |")
+        rows.append(f"| {label} | {r['jacobian']:.1f} | {r['packing']:.1f} | "
+                    f"{r['elements']:.1f} | {r['insertion']:.1f} | {r['dolfinx']:.1f} | "
+                    f"{r['vector']:.1f} | {r['compile_s']:.1f} |")
     return "\n".join(rows) + "\n"
 
 

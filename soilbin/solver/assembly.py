@@ -135,11 +135,17 @@ class ElementAssembler:
 
     def assemble(self, A):
         """The form at the current coefficients into ``A`` (its values replaced)."""
-        coefficients = cpp.fem.pack_coefficients(self._form)
-        constants = cpp.fem.pack_constants(self._form)
+        self.tabulate(cpp.fem.pack_coefficients(self._form), cpp.fem.pack_constants(self._form))
+        self.insert(A)
+
+    def tabulate(self, coefficients, constants):
+        """Every element matrix, from the coefficients and constants DOLFINx packs."""
         for kind, id_, tabulate, entities, permutations, part, m in self._integrals:
             element_matrices(tabulate, entities, self._dofs, coefficients[(kind, id_)],
                              constants, self._x, self._geometry, permutations, self._fixed,
                              self._coordinates, self._values[part].reshape(-1, m, m))
+
+    def insert(self, A):
+        """The element matrices summed into ``A`` (its values replaced)."""
         _check(_LIB.MatSetValuesCOO(A.handle, self._values.ctypes.data,
                                     int(PETSc.InsertMode.INSERT_VALUES)), "MatSetValuesCOO")
