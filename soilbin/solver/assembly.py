@@ -78,25 +78,25 @@ class ElementAssembler:
     preallocation it replaces by the COO pattern of the form's element matrices."""
 
     def __init__(self, form, space, bcs, A):
+        if set(form.integral_types) - set(INTEGRAL_TYPES):
+            raise ValueError("the element assembler takes cell and exterior-facet integrals")
+        if space.element.needs_dof_transformations:
+            raise ValueError("the element assembler takes elements without dof transformations")
         self._form = form
         mesh = space.mesh
-        tdim = mesh.topology.dim
         bs = space.dofmap.bs
         nodes = space.dofmap.list.array.reshape(space.dofmap.list.num_nodes, -1)
         self._dofs = (nodes[:, :, None] * bs + np.arange(bs, dtype=np.int32)).reshape(
             len(nodes), -1).astype(np.int32)
-        if space.element.needs_dof_transformations:
-            raise ValueError("the element assembler takes elements without dof transformations")
         imap = space.dofmap.index_map
         n_local = (imap.size_local + imap.num_ghosts) * bs
         self._fixed = np.zeros(n_local, dtype=np.bool_)
-        owned_fixed = []
+        owned_fixed = [np.zeros(0, dtype=np.int32)]
         for bc in bcs:
             indices, first_ghost = bc.dof_indices()
             self._fixed[indices] = True
             owned_fixed.append(indices[:first_ghost])
-        diagonal = np.unique(np.concatenate(owned_fixed)).astype(np.int32) if bcs else \
-            np.zeros(0, dtype=np.int32)
+        diagonal = np.unique(np.concatenate(owned_fixed))   # one on it, as DOLFINx's
         self._x = mesh.geometry.x
         self._geometry = mesh.geometry.dofmap.array.reshape(len(mesh.geometry.dofmap), -1)
         self._coordinates = np.zeros((self._geometry.shape[1], 3))
