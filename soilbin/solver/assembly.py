@@ -1,16 +1,17 @@
-"""The Jacobian's assembly: FFCx's element kernels in one compiled loop, the element
-matrices handed to PETSc as COO values.
+"""The Jacobian's assembly: FFCx's element kernels in one compiled loop that sums the
+element matrices at positions found once, the sums handed to PETSc as COO values.
 
 DOLFINx 0.5 inserts each element matrix with ``MatSetValuesLocal``, PETSc looking every
 entry up in its row: 60% of the tine's Jacobian (docs/performance.md, *The assembly*).
-Here the positions are found once: ``MatSetPreallocationCOOLocal`` takes the (row,
-column) pairs of every element matrix of the form's cell and exterior-facet integrals
-(and the Dirichlet diagonal), and an assembly computes all element matrices into one
-array - the same FFCx kernels on the coefficients and constants DOLFINx packs, called
-from a compiled loop - which ``MatSetValuesCOO`` sums into the matrix in place. As in
-DOLFINx's assembler, the rows and columns of Dirichlet dofs are zeroed and their diagonal
-set to one, so the matrix has DOLFINx's sparsity and values; only the order in which
-PETSc adds an entry's element contributions may differ (rounding).
+Here every entry's position is found once per mesh: the (row, column) pairs of all element
+matrices of the form's cell and exterior-facet integrals, with the Dirichlet diagonal, are
+reduced to the matrix's nonzeros, which ``MatSetPreallocationCOOLocal`` takes as its
+pattern. An assembly calls the same FFCx kernels on the coefficients and constants DOLFINx
+packs, from a compiled loop that adds each element matrix into the nonzeros' sums, and
+hands the sums to ``MatSetValuesCOO``. As in DOLFINx's assembler, the rows and columns of
+Dirichlet dofs are zeroed and their diagonal set to one, and every sum takes its element
+contributions in DOLFINx's order (cells, then facets, each in the form's order): the same
+matrix to the bit in serial.
 """
 import ctypes
 from pathlib import Path
@@ -47,29 +48,33 @@ def _check(error, call):
 
 
 @kernel
-def element_matrices(tabulate, entities, dofs, coefficients, constants, x, geometry,
-                     permutations, fixed, coordinates, out):
-    """The element matrix of every entity (a cell, or a cell's local facet: ``entities``
-    (n, 2)) into ``out`` (n, m, m), with the rows and columns of the ``fixed`` dofs zeroed;
-    ``permutations``: the facets' quadrature permutations (cell-major), empty if the
-    kernel takes none (then one entry, never read); ``coordinates``: scratch for a cell's
-    node coordinates."""
+def add_element_matrices(tabulate, entities, dofs, coefficients, constants, x, geometry,
+                         permutations, fixed, positions, coordinates, element, sums):
+    """Add the element matrix of every entity (a cell, or a cell's local facet: ``entities``
+    (n, 2)), with the rows and columns of the ``fixed`` dofs zeroed, into ``sums`` at its
+    entries' ``positions`` (n m m, row-major); ``permutations``: the facets' quadrature
+    permutations (cell-major), or one entry never read if the kernel takes none;
+    ``coordinates`` and ``element`` (m, m): scratch."""
     n_facets = permutations.shape[0] // geometry.shape[0]
+    m = element.shape[0]
     for k in range(entities.shape[0]):
         cell, local = entities[k, 0], entities[k, 1]
         for j in range(geometry.shape[1]):
             for d in range(3):
                 coordinates[j, d] = x[geometry[cell, j], d]
-        element = out[k]
         element[:] = 0.0
         tabulate(element.ctypes.data, coefficients[k].ctypes.data, constants.ctypes.data,
                  coordinates.ctypes.data, entities[k, 1:].ctypes.data,
                  permutations[cell * n_facets + local:].ctypes.data)
         cell_dofs = dofs[cell]
-        for i in range(cell_dofs.shape[0]):
+        for i in range(m):
             if fixed[cell_dofs[i]]:
                 element[i, :] = 0.0
                 element[:, i] = 0.0
+        first = k * m * m
+        for i in range(m):
+            for j in range(m):
+                sums[positions[first + i * m + j]] += element[i, j]
 
 
 class ElementAssembler:
@@ -122,15 +127,21 @@ class ElementAssembler:
                 rows.append(np.repeat(element_dofs, m, axis=1).ravel())
                 columns.append(np.tile(element_dofs, (1, m)).ravel())
                 self._integrals.append((kind, ids[i], tabulate, entities, permutations,
-                                        slice(start, start + len(entities) * m * m), m))
+                                        slice(start, start + len(entities) * m * m),
+                                        np.zeros((m, m))))
                 start += len(entities) * m * m
-        self._values = np.empty(start + len(diagonal))
-        self._values[start:] = 1.0
-        rows = np.concatenate(rows + [diagonal]).astype(PETSc.IntType)
-        columns = np.concatenate(columns + [diagonal]).astype(PETSc.IntType)
+        # the nonzeros: each distinct (row, column), the Dirichlet diagonal's last
+        rows, columns = np.concatenate(rows + [diagonal]), np.concatenate(columns + [diagonal])
+        pairs, positions = np.unique(rows.astype(np.int64) * n_local + columns,
+                                     return_inverse=True)
+        self._positions = positions[:start].astype(np.int32)
+        self._diagonal = positions[start:]
+        self._sums = np.zeros(len(pairs))
+        nonzero_rows = (pairs // n_local).astype(PETSc.IntType)
+        nonzero_columns = (pairs % n_local).astype(PETSc.IntType)
         # PETSc maps the local indices to global ones in place
-        _check(_LIB.MatSetPreallocationCOOLocal(A.handle, len(rows), rows.ctypes.data,
-                                                columns.ctypes.data),
+        _check(_LIB.MatSetPreallocationCOOLocal(A.handle, len(pairs), nonzero_rows.ctypes.data,
+                                                nonzero_columns.ctypes.data),
                "MatSetPreallocationCOOLocal")
 
     def assemble(self, A):
@@ -139,13 +150,17 @@ class ElementAssembler:
         self.insert(A)
 
     def tabulate(self, coefficients, constants):
-        """Every element matrix, from the coefficients and constants DOLFINx packs."""
-        for kind, id_, tabulate, entities, permutations, part, m in self._integrals:
-            element_matrices(tabulate, entities, self._dofs, coefficients[(kind, id_)],
-                             constants, self._x, self._geometry, permutations, self._fixed,
-                             self._coordinates, self._values[part].reshape(-1, m, m))
+        """Every element matrix summed into the nonzeros, from the coefficients and constants
+        DOLFINx packs; the Dirichlet diagonal set to one."""
+        self._sums[:] = 0.0
+        for kind, id_, tabulate, entities, permutations, part, element in self._integrals:
+            add_element_matrices(tabulate, entities, self._dofs, coefficients[(kind, id_)],
+                                 constants, self._x, self._geometry, permutations, self._fixed,
+                                 self._positions[part], self._coordinates, element,
+                                 self._sums)
+        self._sums[self._diagonal] = 1.0
 
     def insert(self, A):
-        """The element matrices summed into ``A`` (its values replaced)."""
-        _check(_LIB.MatSetValuesCOO(A.handle, self._values.ctypes.data,
+        """The sums into ``A`` (its values replaced)."""
+        _check(_LIB.MatSetValuesCOO(A.handle, self._sums.ctypes.data,
                                     int(PETSc.InsertMode.INSERT_VALUES)), "MatSetValuesCOO")
