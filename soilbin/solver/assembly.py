@@ -77,6 +77,30 @@ def add_element_matrices(tabulate, entities, dofs, coefficients, constants, x, g
                 sums[positions[first + i * m + j]] += element[i, j]
 
 
+@kernel
+def nonzero_pattern(element_dofs, row_items, row_offsets, seen, position_of, positions,
+                    rows, columns):
+    """The nonzeros of the element matrices of ``element_dofs`` (n, m), row by row, each
+    (row, column) once: the element entries' ``positions`` (n m m, row-major) among them and,
+    if ``rows`` is not empty, their ``rows`` and ``columns``; ``row_items`` lists the (entity,
+    local dof) items k m + i of each row, from ``row_offsets``; ``seen`` (-1) and
+    ``position_of``: scratch over the columns. Returns the number of nonzeros."""
+    m = element_dofs.shape[1]
+    count = 0
+    for row in range(row_offsets.shape[0] - 1):
+        for item in row_items[row_offsets[row]:row_offsets[row + 1]]:
+            k, i = item // m, item % m
+            for j in range(m):
+                column = element_dofs[k, j]
+                if seen[column] != row:
+                    seen[column], position_of[column] = row, count
+                    if rows.shape[0]:
+                        rows[count], columns[count] = row, column
+                    count += 1
+                positions[(k * m + i) * m + j] = position_of[column]
+    return count
+
+
 class ElementAssembler:
     """Assembles the bilinear form ``form`` (on ``space``, Dirichlet conditions ``bcs``)
     into the matrix ``A`` made for it by ``dolfinx.fem.petsc.create_matrix``, whose
@@ -107,7 +131,7 @@ class ElementAssembler:
         self._coordinates = np.zeros((self._geometry.shape[1], 3))
         ffi = ufcx_ffi("double")
         ufcx = form.ufcx_form
-        self._integrals, rows, columns, start = [], [], [], 0
+        self._integrals, cells, start = [], [], 0
         for kind in INTEGRAL_TYPES:
             if kind not in form.integral_types:
                 continue
@@ -122,27 +146,43 @@ class ElementAssembler:
                     mesh.topology.create_entity_permutations()
                     permutations = mesh.topology.get_facet_permutations()
                 tabulate = _TABULATE(int(ffi.cast("uintptr_t", pointers[i].tabulate_tensor_float64)))
-                element_dofs = self._dofs[entities[:, 0]]
-                m = element_dofs.shape[1]
-                rows.append(np.repeat(element_dofs, m, axis=1).ravel())
-                columns.append(np.tile(element_dofs, (1, m)).ravel())
+                m = self._dofs.shape[1]
                 self._integrals.append((kind, ids[i], tabulate, entities, permutations,
                                         slice(start, start + len(entities) * m * m),
                                         np.zeros((m, m))))
+                cells.append(entities[:, 0])
                 start += len(entities) * m * m
-        # the nonzeros: each distinct (row, column), the Dirichlet diagonal's last
-        rows, columns = np.concatenate(rows + [diagonal]), np.concatenate(columns + [diagonal])
-        pairs, positions = np.unique(rows.astype(np.int64) * n_local + columns,
-                                     return_inverse=True)
-        self._positions = positions[:start].astype(np.int32)
-        self._diagonal = positions[start:]
-        self._sums = np.zeros(len(pairs))
-        nonzero_rows = (pairs // n_local).astype(PETSc.IntType)
-        nonzero_columns = (pairs % n_local).astype(PETSc.IntType)
+        self._positions, self._sums, self._diagonal = self._pattern(
+            np.concatenate(cells), n_local, diagonal, A)
+
+    def _pattern(self, cells, n_local, diagonal, A):
+        """The nonzeros of the element matrices of ``cells`` (in the integrals' order) made
+        ``A``'s pattern: (each element entry's position among them, their sums, the
+        positions of the Dirichlet ``diagonal``)."""
+        element_dofs = self._dofs[cells]
+        m = element_dofs.shape[1]
+        items = element_dofs.ravel()
+        row_items = np.argsort(items, kind="stable").astype(np.int32)
+        row_offsets = np.concatenate([[0], np.cumsum(np.bincount(items, minlength=n_local))])
+        positions = np.empty(len(cells) * m * m, dtype=np.int32)
+        seen, position_of = np.full(n_local, -1, dtype=np.int32), np.empty(n_local, np.int32)
+        none = np.zeros(0, dtype=PETSc.IntType)
+        count = nonzero_pattern(element_dofs, row_items, row_offsets, seen, position_of,
+                                positions, none, none)
+        rows, columns = np.empty(count, PETSc.IntType), np.empty(count, PETSc.IntType)
+        seen[:] = -1
+        nonzero_pattern(element_dofs, row_items, row_offsets, seen, position_of, positions,
+                        rows, columns)
+        at_diagonal = np.flatnonzero(rows == columns)
+        on_diagonal = np.full(n_local, -1, dtype=np.int64)
+        on_diagonal[rows[at_diagonal]] = at_diagonal
+        if np.any(on_diagonal[diagonal] < 0):
+            raise ValueError("a Dirichlet dof outside every element: no diagonal entry for it")
         # PETSc maps the local indices to global ones in place
-        _check(_LIB.MatSetPreallocationCOOLocal(A.handle, len(pairs), nonzero_rows.ctypes.data,
-                                                nonzero_columns.ctypes.data),
+        _check(_LIB.MatSetPreallocationCOOLocal(A.handle, count, rows.ctypes.data,
+                                                columns.ctypes.data),
                "MatSetPreallocationCOOLocal")
+        return positions, np.zeros(count), on_diagonal[diagonal]
 
     def assemble(self, A):
         """The form at the current coefficients into ``A`` (its values replaced)."""
