@@ -2,11 +2,11 @@
 element matrices at positions found once, the sums handed to PETSc as COO values.
 
 DOLFINx 0.5 inserts each element matrix with ``MatSetValuesLocal``, PETSc looking every
-entry up in its row: 60% of the tine's Jacobian (docs/performance.md, *The assembly*).
+entry up in its row: half of the tine's Jacobian (docs/performance.md, *The assembly*).
 Here every entry's position is found once per mesh: the (row, column) pairs of all element
-matrices of the form's cell and exterior-facet integrals, with the Dirichlet diagonal, are
-reduced to the matrix's nonzeros, which ``MatSetPreallocationCOOLocal`` takes as its
-pattern. An assembly calls the same FFCx kernels on the coefficients and constants DOLFINx
+matrices of the form's cell and exterior-facet integrals are reduced to the matrix's
+nonzeros by a compiled pass over the rows, and ``MatSetPreallocationCOOLocal`` takes them
+as the matrix's pattern. An assembly calls the same FFCx kernels on the coefficients and constants DOLFINx
 packs, from a compiled loop that adds each element matrix into the nonzeros' sums, and
 hands the sums to ``MatSetValuesCOO``. As in DOLFINx's assembler, the rows and columns of
 Dirichlet dofs are zeroed and their diagonal set to one, and every sum takes its element
@@ -125,10 +125,12 @@ class ElementAssembler:
             indices, first_ghost = bc.dof_indices()
             self._fixed[indices] = True
             owned_fixed.append(indices[:first_ghost])
-        diagonal = np.unique(np.concatenate(owned_fixed))   # one on it, as DOLFINx's
+        diagonal = np.unique(np.concatenate(owned_fixed))
         self._x = mesh.geometry.x
         self._geometry = mesh.geometry.dofmap.array.reshape(len(mesh.geometry.dofmap), -1)
         self._coordinates = np.zeros((self._geometry.shape[1], 3))
+        m = self._dofs.shape[1]
+        self._element = np.zeros((m, m))
         ffi = ufcx_ffi("double")
         ufcx = form.ufcx_form
         self._integrals, cells, start = [], [], 0
@@ -146,10 +148,8 @@ class ElementAssembler:
                     mesh.topology.create_entity_permutations()
                     permutations = mesh.topology.get_facet_permutations()
                 tabulate = _TABULATE(int(ffi.cast("uintptr_t", pointers[i].tabulate_tensor_float64)))
-                m = self._dofs.shape[1]
                 self._integrals.append((kind, ids[i], tabulate, entities, permutations,
-                                        slice(start, start + len(entities) * m * m),
-                                        np.zeros((m, m))))
+                                        slice(start, start + len(entities) * m * m)))
                 cells.append(entities[:, 0])
                 start += len(entities) * m * m
         self._positions, self._sums, self._diagonal = self._pattern(
@@ -193,10 +193,10 @@ class ElementAssembler:
         """Every element matrix summed into the nonzeros, from the coefficients and constants
         DOLFINx packs; the Dirichlet diagonal set to one."""
         self._sums[:] = 0.0
-        for kind, id_, tabulate, entities, permutations, part, element in self._integrals:
+        for kind, id_, tabulate, entities, permutations, part in self._integrals:
             add_element_matrices(tabulate, entities, self._dofs, coefficients[(kind, id_)],
                                  constants, self._x, self._geometry, permutations, self._fixed,
-                                 self._positions[part], self._coordinates, element,
+                                 self._positions[part], self._coordinates, self._element,
                                  self._sums)
         self._sums[self._diagonal] = 1.0
 
