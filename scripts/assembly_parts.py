@@ -72,7 +72,7 @@ def measure_here():
     A = fem.petsc.create_matrix(form)
     return dict(dofs=problem.n_dofs, cells=tagged.mesh.topology.index_map(3).size_local,
                 element=newton._a.function_spaces[0].dofmap.cell_dofs(0).size,
-                jacobian=best_ms(lambda: newton.jacobian(newton.matrix)),
+                jacobian=best_ms(newton.jacobian),
                 packing=best_ms(lambda: (cpp.fem.pack_coefficients(form),
                                          cpp.fem.pack_constants(form))),
                 elements=best_ms(lambda: assembler.tabulate(coefficients, constants)),

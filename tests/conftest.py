@@ -71,7 +71,7 @@ def jacobian_error(problem, seed=0, amplitude=0.01):
 
     x0 = w.vector.copy()
     residual(x0)
-    newton.jacobian(newton.matrix)
+    newton.jacobian()
     dx = x0.duplicate()
     dx.array[:] = rng.standard_normal(len(dx.array))
     dx.array[fixed] = 0.0

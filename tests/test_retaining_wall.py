@@ -160,7 +160,7 @@ def zero_energy_modes(scene, *overrides):
     problem.set_load_factor(0.0)
     newton = problem.newton
     newton.residual(newton._b)
-    newton.jacobian(newton.matrix)
+    newton.jacobian()
     indptr, indices, values = newton.matrix.getValuesCSR()
     dense = scipy.sparse.csr_matrix((values, indices, indptr), shape=newton.matrix.getSize()).toarray()
     s = np.linalg.svd(dense, compute_uv=False)

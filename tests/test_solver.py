@@ -92,7 +92,7 @@ def test_condensed_system_reproduces_the_mixed_solution():
     newton.solve()                   # a plastic state
     A = newton.matrix
     newton.residual(newton._b)
-    newton.jacobian(A)
+    newton.jacobian()
     rhs = A.createVecLeft()
     rhs.setRandom()
     exact, condensed = A.createVecRight(), A.createVecRight()

@@ -179,8 +179,10 @@ class NewtonSolver:
         fem.petsc.set_bc(self._gap, self._bcs, x, 1.0)
         return self._gap.norm(PETSc.NormType.NORM_INFINITY) > 0.0
 
-    def jacobian(self, A):
-        """Assemble the Jacobian at the current iterate (after :meth:`residual`) into ``A``."""
+    def jacobian(self):
+        """Assemble the Jacobian at the current iterate (after :meth:`residual`) into
+        :attr:`matrix`."""
+        A = self.matrix
         self._assembler.assemble(A)
         for term in self._nodal_terms:
             term.add_jacobian(A)
@@ -197,7 +199,7 @@ class NewtonSolver:
         """Assemble the Jacobian at the current iterate (after :meth:`residual`) and factorise
         it (or set up the preconditioner)."""
         with self._clock("assembly_s"):
-            self.jacobian(self.matrix)
+            self.jacobian()
         self.linear.set_operator(self.matrix, self._symmetric_tangent)
 
     def _converged(self, residuals):
