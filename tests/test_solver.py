@@ -193,3 +193,27 @@ def test_the_tangent_floor_moves_newtons_matrix_and_not_its_solution():
     problem.points.floor_tangent(3 * floor)
     assert np.allclose(problem.points._converged_tangent - converged, 2 * floor * model.stiffness,
                        rtol=1e-6, atol=1e-9 * np.abs(model.stiffness).max())
+
+
+def test_regions_of_interleaved_cells_update_as_one_region():
+    """The soil's cells split into two regions of alternate cells (updated through index
+    arrays) give the stress and tangent of the one region (updated through a slice), to the
+    bit, at a plastic iterate."""
+    from soilbin.solver.quadrature import MaterialPoints
+    problem = make_problem("block-drucker-prager")
+    one = problem.points
+    (name, model), = one.models.items()
+    cells = np.unique(one.index[name] // one.points_per_cell)
+    split = {"even": cells[0::2], "odd": cells[1::2]}
+    two = MaterialPoints(problem.disc, problem.w, problem.w_committed,
+                         problem.kinematics.strain_increment(), split,
+                         {"even": model, "odd": model})
+    assert isinstance(one._parts[name], slice)
+    assert all(isinstance(part, np.ndarray) for part in two._parts.values())
+    rng = np.random.default_rng(3)
+    problem.w.x.array[:] = 2e-2 * rng.standard_normal(len(problem.w.x.array))
+    one.update()
+    two.update()
+    assert np.any(one.trial[name]["yield_state"] > 0.0)   # some points returned
+    assert np.array_equal(one._stress, two._stress)
+    assert np.array_equal(one._tangent, two._tangent)
