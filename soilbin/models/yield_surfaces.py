@@ -42,7 +42,7 @@ PRM_SLOTS = 22
 @kernel
 def cap_failure(prm, I1):
     """(F, F', F'') of the failure surface sqrt(J2) = F(I1) = A + B I1 - C exp(-beta I1)
-    (B.12; B.9 with B = 0), at a number or an array of I1."""
+    (B.12; B.9 with B = 0), at one I1 (at an array: :func:`.cap.cap_failure_at`)."""
     e = prm[CAP_C] * np.exp(-prm[CAP_BETA] * I1)
     dF, d2F = prm[CAP_B] + prm[CAP_BETA] * e, -prm[CAP_BETA] ** 2 * e
     if prm[CAP_B] == 0.0:
