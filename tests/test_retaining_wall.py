@@ -116,6 +116,19 @@ def test_mean_dilatation_drives_points_to_the_apex_and_locks(solve_file):
     assert kp > 1.08 * rankine_passive(35.0)
 
 
+def test_quadratic_elements_converge_where_the_mean_dilatation_quadrilateral_locks(solve_file):
+    """docs/theory.md, Locking (studies/wall-elements.toml): from 2-in to 1-in cells the
+    excess of quad9-bbar over Rankine falls (8.1% -> 6.0%), that of quad4-bbar does not
+    (10.2% -> 10.6%); on 1-in cells the quadratic element is the closer by 4.6 points."""
+    excess = {element: [passive_run(solve_file, f"analysis.element={element}",
+                                    f"mesh.element_size={h}")[0] / rankine_passive(35.0) - 1.0
+                        for h in (2.0, 1.0)]
+              for element in ("quad4-bbar", "quad9-bbar")}
+    assert excess["quad9-bbar"][1] < excess["quad9-bbar"][0] - 0.015
+    assert excess["quad4-bbar"][1] > excess["quad4-bbar"][0] - 0.005
+    assert excess["quad4-bbar"][1] - excess["quad9-bbar"][1] > 0.04
+
+
 def test_rough_wall_lies_between_the_lower_bound_and_coulombs_wedge(solve, tmp_path):
     """The wall's vertical displacement held too: the soil sticks to it, so the friction it
     mobilises is the soil's own (δ up to φ). Kp (normal component, 8.47 measured at φ = 35°)
