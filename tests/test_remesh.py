@@ -278,6 +278,31 @@ def test_a_surface_is_meshed_the_same_way_every_time(tmp_path):
         assert np.array_equal(points, meshes[0][0]) and np.array_equal(cells, meshes[0][1])
 
 
+def test_a_surface_is_meshed_by_delaunay_unless_its_tetrahedra_are_below_min_quality(
+        tmp_path, monkeypatch):
+    """The patches are meshed by Delaunay (ten times faster than MeshAdapt on the tine's
+    soil); where its tetrahedra fall below min_quality the model is built again and meshed
+    by MeshAdapt, whose mesh it then is to the bit."""
+    from mpi4py import MPI
+    from soilbin.problem.mesh_quality import simplex_quality
+    from soilbin.remesh import mesher
+    surface = Surface.of(*refined_box_surface(3))
+
+    def tetrahedra(name, min_quality):
+        mesher.mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1},
+                            {f"face{k}": k for k in range(1, 7)}, tmp_path / name, min_quality)
+        mesh = meshio.read(tmp_path / name)
+        return mesh.points, mesh.cells_dict["tetra"]
+    points, cells = tetrahedra("delaunay.msh", 0.0)
+    least = simplex_quality(points[cells]).min()
+    assert 0.0 < least < 1.0
+    fallen_back = tetrahedra("fallen-back.msh", least)
+    monkeypatch.setattr(mesher, "DELAUNAY", mesher.MESH_ADAPT)
+    mesh_adapt = tetrahedra("mesh-adapt.msh", 0.0)
+    assert all(np.array_equal(a, b) for a, b in zip(fallen_back, mesh_adapt))
+    assert len(cells) != len(mesh_adapt[1]) or not np.array_equal(points, mesh_adapt[0])
+
+
 def test_the_fine_cells_at_a_tool_go_with_it(tmp_path):
     """A bar of tetrahedra built fine at the tool (x < 1) and coarse beyond, the tool moved 2
     along x: a cell takes the least of the size built where its soil started and the size

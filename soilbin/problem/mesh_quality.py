@@ -22,6 +22,18 @@ from mpi4py import MPI
 REGULAR_SIMPLEX = {3: 1.0 / np.sqrt(2.0), 2: np.sqrt(3.0) / 2.0}
 
 
+def simplex_quality(x):
+    """(n,) the least scaled Jacobian over the corners of simplices x (n, d + 1, d), signed
+    by the orientation of their vertex order (module doc)."""
+    dim = x.shape[-1]
+    longest = np.zeros(len(x))
+    for v in range(dim + 1):
+        lengths = [np.linalg.norm(x[:, w] - x[:, v], axis=-1) for w in range(dim + 1) if w != v]
+        longest = np.maximum(longest, np.prod(lengths, axis=0))
+    jacobian = np.stack([x[:, v] - x[:, 0] for v in range(1, dim + 1)], axis=-1)
+    return np.linalg.det(jacobian) / longest / REGULAR_SIMPLEX[dim]
+
+
 class MeshQuality:
     """The quality of this rank's owned cells of ``mesh``, from its current coordinates.
     Built on the undeformed mesh, which fixes each cell's orientation."""
@@ -60,12 +72,7 @@ class MeshQuality:
             * self._orientation
 
     def _simplex_corners(self, x):
-        dim = self.mesh.topology.dim
-        longest = np.zeros(len(x))
-        for v in range(dim + 1):
-            lengths = [np.linalg.norm(x[:, w] - x[:, v], axis=-1) for w in range(dim + 1) if w != v]
-            longest = np.maximum(longest, np.prod(lengths, axis=0))
-        return np.linalg.det(self._jacobian(x)) / longest / REGULAR_SIMPLEX[dim]
+        return simplex_quality(x)
 
     def _brick_corners(self, x):
         dim = self.mesh.topology.dim

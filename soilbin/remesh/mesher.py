@@ -16,9 +16,11 @@ surfaces, one per patch of one facet group between folds of more than :data:`CRE
 tool's faces, the bin's sides), with the curves where they meet found here
 (:meth:`~.surface.Surface.borders`: gmsh's ``createTopology`` numbers them in an order that
 changes from run to run, and the mesh changes with it), which gmsh maps onto a plane each
-(``createGeometry``: a patch must be a topological disc) and meshes afresh (MeshAdapt: on
-the mapped patches of the tine's soil Frontal-Delaunay leaves hundreds of inverted
-triangles) with the volume they close, at the sizes of the background field. gmsh's own
+(``createGeometry``: a patch must be a topological disc) and meshes afresh with the volume
+they close, at the sizes of the background field: by Delaunay (0.05 s for the patches of the
+tine's soil), and again by MeshAdapt (0.46 s) where Delaunay fails or leaves a tetrahedron
+below the scene's ``remesh.min_quality`` (on the mapped patches of the tine's soil
+Frontal-Delaunay once left hundreds of inverted triangles). gmsh's own
 ``classifySurfaces`` does not cut at a group's border where the boundary is flat (the footing
 beside the free surface)."""
 import dataclasses
@@ -28,10 +30,14 @@ import gmsh
 import numpy as np
 
 from ..meshes.tagged import check_cells, distribute
+from ..problem.mesh_quality import simplex_quality
 
 
 #: Where the boundary folds by more than this (radians), gmsh cuts it into patches.
 CREASE = math.radians(40.0)
+
+#: gmsh's surface algorithms for the patches of a 3D remesh, in the order tried (module doc).
+DELAUNAY, MESH_ADAPT = 5, 1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,41 +85,55 @@ def mesh_outline(comm, outline, sizes, regions, boundaries, simplices, path):
     return distribute(comm, "remesh", model, dimension=2)
 
 
-def mesh_surface(comm, surface, sizes, regions, boundaries, path):
+def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.0):
     """The TaggedMesh of tetrahedra inside the closed :class:`~.surface.Surface` ``surface``
     (rank 0; None elsewhere), distributed and written to the gmsh file ``path``; ``sizes``,
-    ``regions``, ``boundaries`` as :func:`mesh_outline`'s."""
+    ``regions``, ``boundaries`` as :func:`mesh_outline`'s. A Delaunay mesh is kept if its
+    least scaled Jacobian is above ``min_quality`` (module doc)."""
     def model():
-        gmsh.model.add("remesh")
-        groups = _discrete_model(surface)
-        try:
-            gmsh.model.mesh.createGeometry()
-        except Exception as err:   # gmsh raises a bare Exception with its last error
-            raise RuntimeError(f"gmsh cannot map the deformed soil's boundary patches onto "
-                               f"planes ({err}): a patch is no longer a topological "
-                               "disc") from None
-        faces = [entity for _, entity in gmsh.model.getEntities(2)]
-        volume = gmsh.model.geo.addVolume([gmsh.model.geo.addSurfaceLoop(faces)])
-        gmsh.model.geo.synchronize()
-        (name, region), = regions.items()
-        gmsh.model.addPhysicalGroup(3, [volume], region)
-        gmsh.model.setPhysicalName(3, region, name)
-        for group, tag in boundaries.items():
-            members = [patch for patch, of in groups.items() if of == tag]
-            if members:
-                gmsh.model.addPhysicalGroup(2, members, tag)
-                gmsh.model.setPhysicalName(2, tag, group)
-        _size_field(sizes)
-        gmsh.option.setNumber("Mesh.Algorithm", 1)   # MeshAdapt (module doc)
-        try:
-            _generate(3)
-        except RuntimeError as err:
-            folded = surface.folded(boundaries)
-            raise RuntimeError(f"{err}{folded and ': ' + folded}") from None
+        for attempt, algorithm in enumerate((DELAUNAY, MESH_ADAPT)):
+            if attempt:
+                gmsh.model.remove()
+                gmsh.view.remove(view)
+            view = _surface_model(surface, sizes, regions, boundaries)
+            gmsh.option.setNumber("Mesh.Algorithm", algorithm)
+            try:
+                _generate(3)
+                if attempt or _least_quality() > min_quality:
+                    break
+            except RuntimeError as err:
+                if attempt:
+                    folded = surface.folded(boundaries)
+                    raise RuntimeError(f"{err}{folded and ': ' + folded}") from None
         check_cells(RuntimeError, "the remesher made", 3, True)
         _write(path)
         return regions, dict(boundaries)
     return distribute(comm, "remesh", model, dimension=3)
+
+
+def _surface_model(surface, sizes, regions, boundaries):
+    """The gmsh model of the volume inside ``surface``, its groups and its background size,
+    ready to mesh; returns the size's view."""
+    gmsh.model.add("remesh")
+    groups = _discrete_model(surface)
+    try:
+        gmsh.model.mesh.createGeometry()
+    except Exception as err:   # gmsh raises a bare Exception with its last error
+        raise RuntimeError(f"gmsh cannot map the deformed soil's boundary patches onto "
+                           f"planes ({err}): a patch is no longer a topological "
+                           "disc") from None
+    faces = [entity for _, entity in gmsh.model.getEntities(2)]
+    volume = gmsh.model.geo.addVolume([gmsh.model.geo.addSurfaceLoop(faces)])
+    gmsh.model.geo.synchronize()
+    (name, region), = regions.items()
+    gmsh.model.addPhysicalGroup(3, [volume], region)
+    gmsh.model.setPhysicalName(3, region, name)
+    for group, tag in boundaries.items():
+        members = [patch for patch, of in groups.items() if of == tag]
+        if members:
+            gmsh.model.addPhysicalGroup(2, members, tag)
+            gmsh.model.setPhysicalName(2, tag, group)
+    return _size_field(sizes)
 
 
 def _discrete_model(surface):
@@ -166,7 +186,7 @@ def _write(path):
 
 def _size_field(sizes):
     """The background size: linear over the old cells' simplices (in 2D triangles in the x-z
-    plane)."""
+    plane); returns its view."""
     view = gmsh.view.add("initial element size")
     cells = sizes.cells
     m, k, d = cells.shape
@@ -182,6 +202,16 @@ def _size_field(sizes):
                           "Mesh.Algorithm": 6,          # Frontal-Delaunay (8 crashes in 4.8)
                           "Mesh.RecombinationAlgorithm": 3}.items():   # Blossom full-quad
         gmsh.option.setNumber(option, value)
+    return view
+
+
+def _least_quality():
+    """The least scaled Jacobian of the model's tetrahedra (gmsh orients each positively)."""
+    _, _, nodes = gmsh.model.mesh.getElements(3)
+    tags, coordinates, _ = gmsh.model.mesh.getNodes()
+    position = np.zeros((int(tags.max()) + 1, 3))
+    position[tags] = coordinates.reshape(-1, 3)
+    return float(simplex_quality(position[np.concatenate(nodes).reshape(-1, 4)]).min())
 
 
 def _generate(dimension):

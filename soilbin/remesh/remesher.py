@@ -189,7 +189,8 @@ class Remeshing:
             new_tagged = mesh_outline(comm, boundary, sizes, *groups, element.simplex,
                                       self.folder / mesh_file)
         else:
-            new_tagged = mesh_surface(comm, boundary, sizes, *groups, self.folder / mesh_file)
+            new_tagged = mesh_surface(comm, boundary, sizes, *groups, self.folder / mesh_file,
+                                      self.settings.min_quality)
         self.mesh_file = mesh_file
         mesh_s = time.perf_counter() - start
         new = SoilProblem(scene, new_tagged)
