@@ -525,7 +525,7 @@ def the_same_mesh(monkeypatch):
         old["tagged"] = problem.tagged
         return transferred(self, problem, step)
 
-    def same_mesh(comm, surface, sizes, regions, boundaries, path):
+    def same_mesh(comm, surface, sizes, regions, boundaries, path, min_quality):
         tagged = old["tagged"]
         mesh, facets = tagged.mesh, tagged.facet_tags
         x, cells = mesh.geometry.x, mesh.geometry.dofmap.array.reshape(-1, 4)
