@@ -30,8 +30,12 @@ def simplex_quality(x):
     for v in range(dim + 1):
         lengths = [np.linalg.norm(x[:, w] - x[:, v], axis=-1) for w in range(dim + 1) if w != v]
         longest = np.maximum(longest, np.prod(lengths, axis=0))
-    jacobian = np.stack([x[:, v] - x[:, 0] for v in range(1, dim + 1)], axis=-1)
-    return np.linalg.det(jacobian) / longest / REGULAR_SIMPLEX[dim]
+    return np.linalg.det(simplex_jacobian(x)) / longest / REGULAR_SIMPLEX[dim]
+
+
+def simplex_jacobian(x):
+    """(n, d, d) the derivative of the map of simplices x (n, d + 1, d): edges from vertex 0."""
+    return np.stack([x[:, v] - x[:, 0] for v in range(1, x.shape[-1] + 1)], axis=-1)
 
 
 class MeshQuality:
@@ -59,7 +63,7 @@ class MeshQuality:
         map's at the centre (the mean of the edges along each reference axis)."""
         dim = self.mesh.topology.dim
         if self._simplex:
-            return np.stack([x[:, v] - x[:, 0] for v in range(1, dim + 1)], axis=-1)
+            return simplex_jacobian(x)
         low = [[v for v in range(2 ** dim) if not v >> axis & 1] for axis in range(dim)]
         return np.stack([np.mean([x[:, v | 1 << axis] - x[:, v] for v in low[axis]], axis=0)
                          for axis in range(dim)], axis=-1)
