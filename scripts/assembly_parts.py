@@ -71,7 +71,7 @@ def measure_here():
     coefficients, constants = cpp.fem.pack_coefficients(form), cpp.fem.pack_constants(form)
     A = fem.petsc.create_matrix(form)
     return dict(dofs=problem.n_dofs, cells=tagged.mesh.topology.index_map(3).size_local,
-                element=newton._a.function_spaces[0].dofmap.cell_dofs(0).size,
+                element=assembler._element.shape[0],
                 jacobian=best_ms(newton.jacobian),
                 packing=best_ms(lambda: (cpp.fem.pack_coefficients(form),
                                          cpp.fem.pack_constants(form))),
