@@ -9,7 +9,7 @@ settlements of 0.0175 (where the small-strain curve reaches its plateau), 0.05, 
 0.25 and 0.5 B against the finest mesh's, and the cost (cells,
 remeshes, steps, Newton iterations, CPU time, the seconds of a remesh and of a Newton
 iteration) with what the remeshes changed (largest residual after the transfer, volume and
-plastic-strain changes, force drop). Copies the study's figure into docs/figures and draws
+plastic-work changes, force drop). Copies the study's figure into docs/figures and draws
 the finest case's soil at the end (footing-penetration-soil.png).
 Pressures in psi, lengths in in.
 """
@@ -60,7 +60,7 @@ def tables(results, out, width, c):
                 "| --- | --- |" + " --- |" * len(FRACTIONS)]
     cost = ["| edge size [in] | remeshes | steps (cut) | Newton | CPU [s] | a remesh [s] | "
             "a Newton iteration [s] | largest residual after transfer | largest volume change | "
-            "largest plastic-strain change | largest force drop |",
+            "largest plastic-work change | largest force drop |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for case, summary, rows in results:
         size = case.values[SIZE]
@@ -82,7 +82,7 @@ def tables(results, out, width, c):
                     f"{summary['newton_iterations']} | {summary['cpu_s']:.0f} | "
                     f"{remesh_s / max(len(done), 1):.2f} | {per_iteration:.3f} | "
                     f"{worst('residual_transferred'):.3f} | {worst('volume_change'):.1e} | "
-                    f"{worst('plastic_strain_change'):.3f} | {100 * drop:.1f}% |")
+                    f"{worst('plastic_work_change'):.3f} | {100 * drop:.1f}% |")
     return "\n".join(pressure) + "\n\n" + "\n".join(cost) + "\n"
 
 

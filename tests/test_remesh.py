@@ -345,6 +345,7 @@ def test_a_remeshed_homogeneous_block_keeps_its_state_exactly_in_3d(tmp_path):
         assert float(report["force_after"]) == pytest.approx(float(report["force_before"]),
                                                             rel=1e-12)
         assert abs(float(report["volume_change"])) < 1e-8            # the grid's rounding
+        assert abs(float(report["plastic_work_change"])) < 1e-8
         assert int(report["cells_after"]) > 0
     assert summary["collapse_stress"] == pytest.approx(2 * 500.0 * np.cos(np.radians(30.0))
                                                        / (1 - np.sin(np.radians(30.0))), rel=1e-9)
@@ -409,6 +410,7 @@ def test_a_remeshed_footing_comes_back_to_equilibrium_with_its_state(tmp_path, e
         assert float(report["residual_equilibrated"]) <= 1e-6        # the scene's floor
         assert abs(float(report["volume_change"])) < 1e-4
         assert abs(float(report["plastic_strain_change"])) < 0.02
+        assert abs(float(report["plastic_work_change"])) < 0.02
         assert float(report["quality_after"]) > 0.5                  # a good mesh again
         assert float(report["force_after"]) == pytest.approx(float(report["force_before"]),
                                                             rel=0.03)

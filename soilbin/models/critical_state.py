@@ -75,9 +75,9 @@ from ..tensors import IDENTITY
 from .base import APEX, CAP, ELASTIC, FAILURE, SHEAR, TIP, Sample
 from .elastic import IsotropicElasticity
 from .invariant_return import (YIELD_TOL, bracketed_root, bulk_compliance, bulk_pressure,
-                               bulk_strain, check_converged, finish, fixed_ratio, invariants,
-                               local_settings, pressure_variable, smooth_return, solved_ratio,
-                               strain_row, trial_split)
+                               bulk_strain, bulk_strains, check_converged, finish, fixed_ratio,
+                               invariants, local_settings, pressure_variable, smooth_return,
+                               solved_ratio, strain_row, trial_split)
 from .jit import kernel
 from .yield_surfaces import (CAM_CLAY, CS_M, CS_THETA, EXPONENTIAL, G_, K_, KAPPA_STAR,
                              LOG_SHIFT, MODIFIED_CAM_CLAY, P_MIN, PRM_SLOTS, SURFACE,
@@ -309,6 +309,12 @@ class CriticalStateModel(IsotropicElasticity):
     def yield_pressure(self, p, J):
         """p_c of the yield surface through (p, J), p > 0."""
         raise NotImplementedError
+
+    def volumetric_elastic_strain(self, p, p_n):
+        """The ``elasticity``'s volume strain from p_n to p (the kappa-line's integrated)."""
+        out = np.empty(len(p))
+        bulk_strains(self.prm, p, p_n, out)
+        return out
 
     # --- driver interface -----------------------------------------------------------
 

@@ -1,6 +1,5 @@
-"""Elastic parts: isotropic linear elasticity, C_e = 3K P_vol + 2G P_dev, and the
-volumetric laws (compression positive) of the invariant models, a constant
-bulk modulus (:class:`LinearBulk`) or the kappa-line (:class:`ExponentialBulk`)."""
+"""Elastic parts: isotropic linear elasticity, C_e = 3K P_vol + 2G P_dev, and the plastic
+work a return dissipates, from the elastic strain of the stress change."""
 import dataclasses
 
 import numpy as np
@@ -13,47 +12,6 @@ from .base import ELASTIC, SHEAR, Model, Sample
 def elastic_stiffness(K, G):
     """6x6 Mandel stiffness 3K P_vol + 2G P_dev."""
     return 3.0 * K * P_VOL + 2.0 * G * P_DEV
-
-
-class LinearBulk:
-    """p = p_n + K e: constant bulk modulus."""
-
-    def __init__(self, K):
-        self.K = K
-
-    def pressure(self, p_n, e):
-        return p_n + self.K * e
-
-    def strain(self, p, p_n):
-        """Elastic volumetric strain (compression positive) taking p_n to p."""
-        return (p - p_n) / self.K
-
-    def compliance(self, p):
-        """dE/dp = 1 / K(p)."""
-        return np.full(np.shape(p), 1.0 / self.K)
-
-    def admissible(self, p):
-        return np.isfinite(p)
-
-
-class ExponentialBulk:
-    """K = (p + p_min) / kappa_star, integrated exactly over a step:
-    p + p_min = (p_n + p_min) exp(e / kappa_star)."""
-
-    def __init__(self, kappa_star, p_min):
-        self.kappa_star, self.p_min = kappa_star, p_min
-
-    def pressure(self, p_n, e):
-        return (p_n + self.p_min) * np.exp(np.minimum(e / self.kappa_star, 700.0)) - self.p_min
-
-    def strain(self, p, p_n):
-        return self.kappa_star * np.log((p + self.p_min) / (p_n + self.p_min))
-
-    def compliance(self, p):
-        return self.kappa_star / (p + self.p_min)
-
-    def admissible(self, p):
-        return p + self.p_min > 0.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,11 +32,6 @@ class IsotropicElasticity(Model):
         return self.E / (2.0 * (1.0 + self.nu))
 
     @property
-    def bulk(self):
-        """The volumetric elastic law of the invariant models (compression positive)."""
-        return LinearBulk(self.K)
-
-    @property
     def stiffness(self):
         return elastic_stiffness(self.K, self.G)
 
@@ -89,6 +42,25 @@ class IsotropicElasticity(Model):
     def trial(self, deps, stress):
         """Elastic predictor sigma_n + C_e : deps."""
         return stress + deps @ self.stiffness
+
+    def volumetric_elastic_strain(self, p, p_n):
+        """The elastic volume strain (compression positive) taking the mean pressure p_n to
+        p (compression positive), (n,): constant K."""
+        return (p - p_n) / self.K
+
+    def elastic_strain(self, stress_n, stress):
+        """The elastic strain (n, 6) taking ``stress_n`` to ``stress``: the deviator's change
+        over 2G, the volume's from :meth:`volumetric_elastic_strain`."""
+        p_n, p = (-s[:, :3].sum(axis=1) / 3.0 for s in (stress_n, stress))
+        return ((stress - stress_n) @ P_DEV / (2.0 * self.G)
+                - self.volumetric_elastic_strain(p, p_n)[:, None] * IDENTITY / 3.0)
+
+    def plastic_work(self, deps, stress_n, stress):
+        """The plastic work per unit volume of the increment ``deps`` from ``stress_n`` to
+        the returned ``stress`` (n,): sigma : deps_p with deps_p = deps - deps_e, the
+        dissipation of the backward-Euler return (its flow direction is taken at the
+        returned stress)."""
+        return np.einsum("ij,ij->i", stress, deps - self.elastic_strain(stress_n, stress))
 
 
 @dataclasses.dataclass(frozen=True)

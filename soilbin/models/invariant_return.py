@@ -117,6 +117,13 @@ def bulk_strain(prm, p, p_n):
 
 
 @kernel
+def bulk_strains(prm, p, p_n, out):
+    """:func:`bulk_strain` at every point: out[i] = E(p[i]; p_n[i])."""
+    for i in range(len(p)):
+        out[i] = bulk_strain(prm, p[i], p_n[i])
+
+
+@kernel
 def bulk_compliance(prm, p):
     """dE/dp = 1 / K(p)."""
     if prm[EXPONENTIAL] == 1.0:

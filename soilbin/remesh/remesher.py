@@ -15,8 +15,8 @@ scale unchanged. Each model then makes the history variables it ties together co
 again (the caps' centre from their end). The
 re-equilibration is one Newton solve at that load factor with the return map, which takes a
 transferred stress outside its yield surface back to it (where it fails, the same in stages:
-:func:`_equilibrated`); its first and last residuals are reported with the soil's volume and
-its integral of the equivalent plastic strain before and after.
+:func:`_equilibrated`); its first and last residuals are reported with the soil's volume, its integral of the
+equivalent plastic strain and its plastic work before and after the transfer.
 """
 import dataclasses
 import time
@@ -33,7 +33,7 @@ from ..layout import CONTACT, GLOBAL, NODES, POINTS, CellLayout, gather_rows
 from ..problem import SoilProblem
 from ..problem.loads import start_mean_pressure
 from ..solver.newton import NewtonResult
-from ..solver.quadrature import quadrature_space
+from ..solver.quadrature import PLASTIC_WORK, quadrature_space
 from .mesher import Sizes, mesh_outline, mesh_surface
 from .outline import OutlineError, gather_outline, initial_sizes
 from .surface import gather_surface
@@ -61,8 +61,9 @@ class RemeshReport:
     """What one remesh did (``remeshes.csv``): after ``step``, the cells before and after, the
     equilibrium residual (of the run's force scale) after the transfer and after the
     re-equilibration with its Newton iterations, the driven force before and after, the
-    relative change of the soil's volume and of its integral of the equivalent plastic strain,
-    the least scaled Jacobian before and after, and the seconds spent: meshing (the outline
+    relative change of the soil's volume, of its integral of the equivalent plastic strain and
+    of its plastic work (:data:`~soilbin.solver.quadrature.PLASTIC_WORK`) by the transfer, the
+    least scaled Jacobian before and after, and the seconds spent: meshing (the outline
     gathered, gmsh, the mesh distributed), the new problem with its transferred state, the
     re-equilibration, and all of it."""
     step: int
@@ -76,6 +77,7 @@ class RemeshReport:
     force_after: float
     volume_change: float
     plastic_strain_change: float
+    plastic_work_change: float
     quality_before: float
     quality_after: float
     mesh_s: float
@@ -156,7 +158,8 @@ class Remeshing:
             newton_iterations=result.iterations,
             force_before=record.force, force_after=seen.force,
             volume_change=transferred[0] / before[0] - 1.0,
-            plastic_strain_change=(transferred[1] / before[1] - 1.0 if before[1] else 0.0),
+            plastic_strain_change=_change(transferred[1], before[1]),
+            plastic_work_change=_change(transferred[2], before[2]),
             quality_before=record.columns.get("mesh_quality", float("nan")),
             quality_after=seen.columns.get("mesh_quality", float("nan")),
             mesh_s=mesh_s, transfer_s=transfer_s,
@@ -395,15 +398,22 @@ def _point_coordinates(problem):
 
 
 def soil_integrals(problem):
-    """(volume, ∫ equivalent plastic strain dV) of the soil in its current configuration
-    (collective)."""
+    """(volume, ∫ equivalent plastic strain dV, ∫ plastic work dV) of the soil in its
+    current configuration (collective)."""
     points, disc = problem.points, problem.disc
-    plastic = fem.Function(quadrature_space(problem.mesh, disc.element.quadrature_degree))
-    points.write(points.history("eps_p_eq"), plastic)
+    integrands = [fem.Constant(problem.mesh, 1.0)]
+    for key in ("eps_p_eq", PLASTIC_WORK):
+        integrands.append(fem.Function(quadrature_space(problem.mesh,
+                                                        disc.element.quadrature_degree)))
+        points.write(points.history(key), integrands[-1])
     dx = disc.measure()
-    one = fem.Constant(problem.mesh, 1.0)
     return tuple(problem.comm.allreduce(fem.assemble_scalar(fem.form(f * dx)), op=MPI.SUM)
-                 for f in (one, plastic))
+                 for f in integrands)
+
+
+def _change(after, before):
+    """after / before - 1; zero where there was nothing before."""
+    return after / before - 1.0 if before else 0.0
 
 
 def _cells(problem):

@@ -18,6 +18,11 @@ from ..layout import POINTS
 from ..tensors import from_mandel, to_mandel
 from .linear_solver import all_symmetric
 
+#: The history every point holds beside its model's: the plastic work per unit volume done
+#: on it so far, sigma : deps_p summed over the converged steps
+#: (:meth:`~soilbin.models.elastic.IsotropicElasticity.plastic_work`).
+PLASTIC_WORK = "plastic_work"
+
 
 def quadrature_space(mesh, degree, shape=None):
     """Quadrature space on the default Gauss rule of ``degree``: scalar, 6-vector or 6x6."""
@@ -82,10 +87,12 @@ class MaterialPoints:
         if initial_stress is not None:
             x = self.evaluate(self.expression(disc.coordinates()))
             stress0 = initial_stress(x)
-        self.committed = {name: self.models[name].initial_state(
-                              len(idx), None if stress0 is None else stress0[idx])
+        self.committed = {name: {**self.models[name].initial_state(
+                                     len(idx), None if stress0 is None else stress0[idx]),
+                                 PLASTIC_WORK: np.zeros(len(idx))}
                           for name, idx in self.index.items()}
         self.trial = dict(self.committed)
+        self._increment = None   # the strain increment of the trial states
         # Stress and tangent in evaluation order: views of the Functions' values where their
         # dof order is the evaluation order (no copy to write), else arrays copied over.
         self._in_order = np.array_equal(self._slot, np.arange(n_points))
@@ -142,6 +149,7 @@ class MaterialPoints:
         """
         if self._at_committed_state():
             self.trial = dict(self.committed)
+            self._increment = None
             for name, idx in self.index.items():
                 self._stress[idx] = self.committed[name]["stress"]
             if not self._tangent_frozen:
@@ -149,7 +157,7 @@ class MaterialPoints:
             if self.strain is not None:
                 self.strain.x.array[:] = 0.0
         else:
-            deps = self.strain_increment()
+            deps = self._increment = self.strain_increment()
             if self.strain is not None:
                 self.write(deps, self.strain)
             failure = ""
@@ -194,8 +202,15 @@ class MaterialPoints:
         """The trial history of the converged iterate becomes the committed history.
 
         ``rotation`` (n_points, 3, 3), if given, turns every symmetric-tensor
-        history (shape (6,), stress included) with it: h -> R h Rᵀ.
+        history (shape (6,), stress included) with it: h -> R h Rᵀ. The plastic work of
+        each point (:data:`PLASTIC_WORK`) grows by its increment's.
         """
+        for name, part in self._parts.items():
+            if PLASTIC_WORK not in self.trial[name]:   # returned from the committed state
+                committed, trial = self.committed[name], self.trial[name]
+                work = self.models[name].plastic_work(self._increment[part], committed["stress"],
+                                                      trial["stress"])
+                self.trial[name] = {**trial, PLASTIC_WORK: committed[PLASTIC_WORK] + work}
         self.committed = dict(self.trial)
         if rotation is not None:
             for name, state in self.committed.items():
