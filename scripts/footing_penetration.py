@@ -13,7 +13,6 @@ plastic-work changes, force drop). Copies the study's figure into docs/figures a
 the finest case's soil at the end (footing-penetration-soil.png).
 Pressures in psi, lengths in in.
 """
-import csv
 import shutil
 from xml.etree import ElementTree
 
@@ -28,7 +27,7 @@ from matplotlib.colors import LogNorm
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
-from study_tables import arguments, at, finished, run_study
+from study_tables import arguments, at, finished, remeshes, run_study
 
 SIZE = "mesh.edge_size"
 FRACTIONS = (0.0175, 0.05, 0.125, 0.25, 0.5)   # settlement / B; 0.035 in: the small-strain plateau
@@ -41,14 +40,6 @@ SLACK = 1e-5
 
 def pressure_at(rows, settlement):
     return at(rows, "pressure", settlement, SLACK)
-
-
-def remeshes(folder):
-    path = folder / "remeshes.csv"
-    if not path.exists():
-        return []
-    with open(path) as f:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
 
 
 def tables(results, out, width, c):

@@ -5,31 +5,21 @@ Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each 
 summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
 docs/chapter8.md (--page) two tables: per mesh the draft at each inch of travel, the lift at
 the end and the draft over the last sixth of the travel (mean and spread); and what the
-travel cost (cells, remeshes, steps, Newton iterations, wall time, and a remesh against a
-Newton iteration). A case that failed (a remesh that could not be made) or was interrupted
-shows how far it went. Copies the study's figures into docs/figures (--figures DIR). Loads
-in lb, travel in in.
+travel cost (cells, remeshes, steps, Newton iterations, wall time, a remesh against a
+Newton iteration, and the plastic work's change by each transfer). A case that failed (a
+remesh that could not be made) or was interrupted shows how far it went. Copies the study's
+figures into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
-import csv
 import shutil
 
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
-from study_tables import arguments, at, finished, run_study
+from study_tables import arguments, at, finished, remeshes, run_study
 
 NAME = "tine-long-travel"
 SIZE = "mesh.element_size"
 TRAVELS = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
-
-
-def remeshes(folder):
-    """The rows of a run's remeshes.csv, as numbers (none if it never remeshed)."""
-    try:
-        with open(folder / "remeshes.csv") as f:
-            return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-    except OSError:
-        return []
 
 
 def size_of(case, scene_size):
@@ -54,8 +44,9 @@ def drafts(results, scene_size):
 def costs(results, scene_size):
     lines = ["| element size [in] | cells at the start → the end | unknowns at the end | "
              "remeshes | steps (cuts) | Newton (failed) | wall time [min] | wall time per "
-             "Newton iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "Newton iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] | "
+             "the plastic work's change by a transfer |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for case, summary, _, remeshed in results:
         iterations = summary["newton_iterations"] + summary["failed_newton_iterations"]
         per_iteration = summary["wall_s"] / iterations
@@ -66,13 +57,15 @@ def costs(results, scene_size):
             iterations_worth = sum(moved) / len(moved) / per_iteration
             remesh = f"{min(moved):.1f}–{max(moved):.1f} ({iterations_worth:.1f} iterations)"
             equilibrium = f"{min(settled):.0f}–{max(settled):.0f}"
+            work = [100 * r["plastic_work_change"] for r in remeshed]
+            work = f"{min(work):+.1f}% to {max(work):+.1f}%"
         else:
-            remesh = equilibrium = "–"
+            remesh = equilibrium = work = "–"
         lines.append(f"| {size_of(case, scene_size)} | {first} → {summary['n_cells']} | "
                      f"{summary['n_dofs']} | {len(remeshed)} | {summary['n_steps']} "
                      f"({summary['cuts']}) | {summary['newton_iterations']} "
                      f"({summary['failed_newton_iterations']}) | {summary['wall_s'] / 60:.0f} | "
-                     f"{per_iteration:.2f} | {remesh} | {equilibrium} |")
+                     f"{per_iteration:.2f} | {remesh} | {equilibrium} | {work} |")
     return "\n".join(lines)
 
 

@@ -66,3 +66,12 @@ def at(rows, column, displacement, slack=1e-9):
     if not reached or reached[-1] < displacement * (1.0 - slack):
         return None
     return float(np.interp(displacement, reached, [r[column] for r in rows]))
+
+
+def remeshes(folder):
+    """The rows of a run's remeshes.csv, as numbers (none if it never remeshed)."""
+    try:
+        with open(folder / "remeshes.csv") as f:
+            return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    except OSError:
+        return []
