@@ -15,8 +15,9 @@ scale unchanged. Each model then makes the history variables it ties together co
 again (the caps' centre from their end). The
 re-equilibration is one Newton solve at that load factor with the return map, which takes a
 transferred stress outside its yield surface back to it (where it fails, the same in stages:
-:func:`_equilibrated`); its first and last residuals are reported with the soil's volume, its integral of the
-equivalent plastic strain and its plastic work before and after the transfer.
+:func:`_equilibrated`); its first and last residuals are reported with the soil's volume,
+its integral of the equivalent plastic strain and its plastic work before and after the
+transfer.
 """
 import dataclasses
 import time
