@@ -3,9 +3,9 @@ docs/chapter8.md.
 
 Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each case's
 summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
-docs/chapter8.md (--page) two tables: per mesh the draft at each inch of travel, the lift at
-the end and the draft over the last sixth of the travel (mean and spread); and what the
-travel cost (cells, remeshes, steps, Newton iterations, wall time, a remesh against a
+docs/chapter8.md (--page) two tables: per element and mesh the draft at each inch of travel,
+the lift at the end and the draft over the last sixth of the travel (mean and spread); and
+what the travel cost (cells, remeshes, steps, Newton iterations, wall time, a remesh against a
 Newton iteration, and the plastic work's change by each transfer). A case that failed (a
 remesh that could not be made) or was interrupted shows how far it went. Copies the study's
 figures into docs/figures (--figures DIR). Loads in lb, travel in in.
@@ -19,34 +19,38 @@ from study_tables import arguments, at, finished, remeshes, run_study
 
 NAME = "tine-long-travel"
 SIZE = "mesh.element_size"
+ELEMENT = "analysis.element"
 TRAVELS = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
 
 
-def size_of(case, scene_size):
-    size = case.values.get(SIZE, scene_size)
-    return f"{size:g}" + (" (the scene's)" if size == scene_size else "")
+def mesh_of(case, scene):
+    """'element | element size' of a case, the scene's own marked."""
+    element = case.values.get(ELEMENT, scene.analysis.element.value)
+    size = case.values.get(SIZE, scene.mesh.element_size)
+    own = element == scene.analysis.element.value and size == scene.mesh.element_size
+    return f"`{element}` | {size:g}" + (" (the scene's)" if own else "")
 
 
-def drafts(results, scene_size):
-    lines = ["| element size [in] | travel [in] (status) | "
+def drafts(results, scene):
+    lines = ["| element | element size [in] | travel [in] (status) | "
              + " | ".join(f"draft at {t:g} in [lb]" for t in TRAVELS)
              + " | lift at the end [lb] | draft over the last sixth of the travel [lb] | its spread |",
-             "| --- | --- | " + "--- | " * len(TRAVELS) + "--- | --- | --- |"]
+             "| --- | --- | --- | " + "--- | " * len(TRAVELS) + "--- | --- | --- |"]
     for case, summary, rows, _ in results:
         cells = [f"{d:.1f}" if (d := at(rows, "force", t)) is not None else "–" for t in TRAVELS]
-        lines.append(f"| {size_of(case, scene_size)} | {rows[-1]['displacement']:.2f} "
+        lines.append(f"| {mesh_of(case, scene)} | {rows[-1]['displacement']:.2f} "
                      f"({summary['status']}) | "
                      + " | ".join(cells) + f" | {rows[-1]['lift']:.1f} | "
                      f"{summary['steady_draft']:.1f} | {100 * summary['steady_spread']:.1f}% |")
     return "\n".join(lines)
 
 
-def costs(results, scene_size):
-    lines = ["| element size [in] | cells at the start → the end | unknowns at the end | "
+def costs(results, scene):
+    lines = ["| element | element size [in] | cells at the start → the end | unknowns at the end | "
              "remeshes | steps (cuts) | Newton (failed) | wall time [min] | wall time per "
              "Newton iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] | "
              "the plastic work's change by a transfer |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for case, summary, _, remeshed in results:
         iterations = summary["newton_iterations"] + summary["failed_newton_iterations"]
         per_iteration = summary["wall_s"] / iterations
@@ -61,7 +65,7 @@ def costs(results, scene_size):
             work = f"{min(work):+.1f}% to {max(work):+.1f}%"
         else:
             remesh = equilibrium = work = "–"
-        lines.append(f"| {size_of(case, scene_size)} | {first} → {summary['n_cells']} | "
+        lines.append(f"| {mesh_of(case, scene)} | {first} → {summary['n_cells']} | "
                      f"{summary['n_dofs']} | {len(remeshed)} | {summary['n_steps']} "
                      f"({summary['cuts']}) | {summary['newton_iterations']} "
                      f"({summary['failed_newton_iterations']}) | {summary['wall_s'] / 60:.0f} | "
@@ -78,9 +82,9 @@ def main():
                for case, summary, rows in finished(study, args.out, interrupted=True) if rows]
     if not results:
         raise SystemExit(f"{args.out}: no finished case")
-    results.sort(key=lambda r: -r[0].values.get(SIZE, 0.0))
-    scene_size = load_scene(study.scene_path).mesh.element_size
-    text = drafts(results, scene_size) + "\n\n" + costs(results, scene_size) + "\n"
+    scene = load_scene(study.scene_path)
+    results.sort(key=lambda r: (r[0].values.get(ELEMENT, ""), -r[0].values.get(SIZE, 0.0)))
+    text = drafts(results, scene) + "\n\n" + costs(results, scene) + "\n"
     print(text)
     draw_figures(study, [Outcome(case, summary["status"], summary, ran=False)
                          for case, summary, _, _ in results], args.out)
