@@ -211,6 +211,21 @@ def test_a_soil_folded_onto_itself_is_named_where_gmsh_cannot_fill_it(tmp_path):
                      tmp_path / "folded.msh")
 
 
+def test_gmsh_s_surfaces_in_a_failed_remesh_are_named_by_their_groups():
+    """gmsh names the patches it could not mesh by its own surface numbers ("Invalid boundary
+    mesh (overlapping facets) on surface 4 surface 9": the tine's heap in clay at 4.65 in
+    coming too close to the soil's face); the message names their groups."""
+    from soilbin.remesh.mesher import patch_groups
+    groups = {1: 5, 4: 7, 9: 1}
+    boundaries = {"surface": 1, "base": 5, "tool_front": 7}
+    message = "Error: Invalid boundary mesh (overlapping facets) on surface 4 surface 9"
+    assert (patch_groups(message, groups, boundaries)
+            == "; gmsh's surface 4 is a patch of tool_front, 9 of surface")
+    assert patch_groups("surface 4 surface 4", groups, boundaries).count("surface 4") == 1
+    assert patch_groups("Error: PLC Error: A segment and a facet intersect", groups,
+                        boundaries) == ""
+
+
 def test_a_crumple_of_the_surface_joins_a_larger_patch_of_its_group():
     """A patch of at most CRUMPLE triangles folded past the crease (the heave beside the blade
     after 4 in: gmsh's fresh mesh of the patch around overlapped it) joins its widest larger

@@ -25,6 +25,7 @@ the tine's soil Frontal-Delaunay once left hundreds of inverted triangles). gmsh
 beside the free surface)."""
 import dataclasses
 import math
+import re
 
 import gmsh
 import numpy as np
@@ -100,7 +101,7 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
             if attempt:
                 gmsh.model.remove()
                 gmsh.view.remove(view)
-            view = _surface_model(surface, sizes, regions, boundaries)
+            view, groups = _surface_model(surface, sizes, regions, boundaries)
             gmsh.option.setNumber("Mesh.Algorithm", algorithm)
             try:
                 _generate(3)
@@ -109,16 +110,33 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
             except RuntimeError as err:
                 if attempt:
                     folded = surface.folded(boundaries)
-                    raise RuntimeError(f"{err}{folded and ': ' + folded}") from None
+                    raise RuntimeError(f"{err}{patch_groups(str(err), groups, boundaries)}"
+                                       f"{folded and ': ' + folded}") from None
         check_cells(RuntimeError, "the remesher made", 3, True)
         _write(path)
         return regions, dict(boundaries)
     return distribute(comm, "remesh", model, dimension=3)
 
 
+def patch_groups(message, groups, boundaries):
+    """The facet groups of the patches that a gmsh ``message`` names ("surface 4"), as
+    "; gmsh's surface 4 is a patch of tool_front, 9 of surface" ('' if it names none);
+    ``groups``: patch (gmsh surface) -> facet group tag, ``boundaries``: name -> tag."""
+    names = {tag: name for name, tag in boundaries.items()}
+    patches = [int(n) for n in dict.fromkeys(re.findall(r"surface (\d+)", message))]
+    named = [(patch, names[groups[patch]]) for patch in patches
+             if groups.get(patch) in names]
+    if not named:
+        return ""
+    (first, group), *rest = named
+    return (f"; gmsh's surface {first} is a patch of {group}"
+            + "".join(f", {patch} of {group}" for patch, group in rest))
+
+
 def _surface_model(surface, sizes, regions, boundaries):
     """The gmsh model of the volume inside ``surface``, its groups and its background size,
-    ready to mesh; returns the size's view."""
+    ready to mesh; returns the size's view and each patch's (gmsh surface's) facet group
+    tag."""
     gmsh.model.add("remesh")
     groups = _discrete_model(surface)
     try:
@@ -138,7 +156,7 @@ def _surface_model(surface, sizes, regions, boundaries):
         if members:
             gmsh.model.addPhysicalGroup(2, members, tag)
             gmsh.model.setPhysicalName(2, tag, group)
-    return _size_field(sizes)
+    return _size_field(sizes), groups
 
 
 def _discrete_model(surface):
