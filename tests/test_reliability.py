@@ -198,6 +198,17 @@ def test_the_jit_compiler_logs_nothing_below_warnings():
     assert done.stderr.strip() == "WARNING:root:kept"
 
 
+def test_the_3d_picture_draws_a_large_deformation_to_scale():
+    """Small strain: the largest displacement drawn as 3% of the mesh's extent; large
+    deformation: as it is (the heave and the furrow of a long travel are the soil's shape)."""
+    from soilbin.app.figures_3d import drawn_scale
+    points = np.array([[0.0, 0.0, 0.0], [20.0, 10.0, 5.0]])
+    u = np.array([[0.0, 0.0, 0.0], [6.0, 0.0, 1.0]])
+    assert drawn_scale(points, u, to_scale=False) == pytest.approx(0.03 * 20.0 / 6.0)
+    assert drawn_scale(points, u, to_scale=True) == 1.0
+    assert drawn_scale(points, 0.0 * u, to_scale=False) == 1.0
+
+
 @pytest.mark.parametrize("cells, faces", [
     (np.array([[0, 1, 3, 2, 4, 5, 7, 6]]), np.array([[0, 1, 2, 3]])),          # a brick
     (np.array([[0, 1, 3, 7], [0, 3, 2, 7]]), np.array([[0, 1, 2], [0, 2, 3]])),  # tetrahedra

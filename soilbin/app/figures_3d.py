@@ -1,10 +1,10 @@
 """A 3D picture of a tool run: the deformed soil coloured by the equivalent plastic strain,
 with the tool drawn, made off screen with pyvista (EGL or OSMesa; no X server).
 
-VTK runs in its own process (``python -m soilbin.app.figures_3d DATA.npz OUT.png LENGTH``):
-in the process that has loaded DOLFINx, VTK's C++ runtime clashes with it (std::regex
-aborts), and a crash of the renderer must not end a run. A picture that cannot be drawn
-is a warning, not a failed run.
+VTK runs in its own process (``python -m soilbin.app.figures_3d DATA.npz OUT.png LENGTH
+TO_SCALE``): in the process that has loaded DOLFINx, VTK's C++ runtime clashes with it
+(std::regex aborts), and a crash of the renderer must not end a run. A picture that cannot
+be drawn is a warning, not a failed run.
 """
 import os
 import subprocess
@@ -23,18 +23,28 @@ SOLIDS = {8: "HEXAHEDRON", 4: "TETRA"}
 FACES = {4: "QUAD", 3: "TRIANGLE"}
 
 
-def soil_3d_png(soil, tool, length, path):
+def drawn_scale(points, u, to_scale):
+    """The factor the displacements ``u`` are drawn with on the mesh ``points``: 1 (the
+    deformed soil as it is) if ``to_scale`` (large deformation, where the displacement is
+    the soil's motion: the heave, the furrow), else the largest drawn as
+    :data:`DRAWN_DISPLACEMENT` of the mesh's extent (small strain)."""
+    largest = np.abs(u).max()
+    if to_scale or largest == 0:
+        return 1.0
+    return DRAWN_DISPLACEMENT * np.ptp(points, axis=0).max() / largest
+
+
+def soil_3d_png(soil, tool, length, path, to_scale=False):
     """``soil``: (points, hexahedra or tetrahedra, point data, cell data) of the last frame
     (displacement on the nodes, plastic_strain on the cells); ``tool``: (points,
     quadrilaterals or triangles, its displacement (3,)); drawn on the initial mesh warped by
-    a stated factor; ``length``: the coordinates' unit."""
+    the factor of :func:`drawn_scale` (stated in the picture); ``length``: the coordinates'
+    unit."""
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")   # skip X
     import pyvista as pv
     points, cells, point_data, cell_data = soil
     u = point_data["displacement"]
-    extent = np.ptp(points, axis=0).max()
-    largest = np.abs(u).max()
-    scale = DRAWN_DISPLACEMENT * extent / largest if largest > 0 else 1.0
+    scale = drawn_scale(points, u, to_scale)
     grid = pv.UnstructuredGrid({getattr(pv.CellType, SOLIDS[cells.shape[1]]): cells}, points)
     grid.point_data["displacement"] = u
     strain = cell_data["plastic_strain"]
@@ -57,15 +67,16 @@ def soil_3d_png(soil, tool, length, path):
                      color="firebrick", show_edges=True, label="tool")
     plotter.show_bounds(xtitle=f"x (travel) [{length}]", ytitle=f"y [{length}]",
                         ztitle=f"z [{length}]", font_size=9, location="outer")
+    drawing = "drawn to scale" if to_scale else f"drawn x{scale:.3g}"
     plotter.add_text(f"soil that yielded (equivalent plastic strain >= {drawn:.2g}), the rest grey; "
-                     f"displacements drawn x{scale:.3g}; tool in red", font_size=9)
+                     f"displacements {drawing}; tool in red", font_size=9)
     plotter.view_vector((0.5, -1.0, 0.6))
     plotter.camera.zoom(1.3)
     plotter.screenshot(str(path))
     plotter.close()
 
 
-def draw_in_subprocess(soil, tool, length, path):
+def draw_in_subprocess(soil, tool, length, path, to_scale=False):
     """Draw :func:`soil_3d_png` in a child process; returns '' or why it was not drawn."""
     path = Path(path)
     data = path.with_suffix(".npz")
@@ -74,7 +85,8 @@ def draw_in_subprocess(soil, tool, length, path):
              plastic_strain=cell_data["plastic_strain"], tool_points=tool_points, quads=quads,
              tool_u=tool_u)
     try:
-        done = subprocess.run([sys.executable, "-m", __name__, str(data), str(path), length],
+        done = subprocess.run([sys.executable, "-m", __name__, str(data), str(path), length,
+                               str(int(to_scale))],
                               capture_output=True, text=True, timeout=300)
     except (OSError, subprocess.TimeoutExpired) as err:
         return str(err)
@@ -84,12 +96,12 @@ def draw_in_subprocess(soil, tool, length, path):
     return "" if done.returncode == 0 and path.is_file() else lines[-1]
 
 
-def _main(data, path, length):
+def _main(data, path, length, to_scale):
     d = np.load(data)
     soil_3d_png((d["points"], d["cells"], {"displacement": d["displacement"]},
                  {"plastic_strain": d["plastic_strain"]}),
-                (d["tool_points"], d["quads"], d["tool_u"]), length, path)
+                (d["tool_points"], d["quads"], d["tool_u"]), length, path, to_scale == "1")
 
 
 if __name__ == "__main__":
-    _main(*sys.argv[1:4])
+    _main(*sys.argv[1:5])

@@ -221,7 +221,8 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     picture = folder.fields.picture() if folder.fields is not None and comm.rank == 0 else None
     if interrupted is None and records and picture is not None:
         failure = figures_3d.draw_in_subprocess(*picture, scene.unit_system.length,
-                                                out_dir / "soil-3d.png")
+                                                out_dir / "soil-3d.png",
+                                                to_scale=problem.moves_mesh)
         if failure:
             print(f"soilbin: warning: soil-3d.png not drawn: {failure}", file=sys.stderr)
     return summary
