@@ -4,14 +4,16 @@ docs/chapter8.md.
 Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each case's
 summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
 docs/chapter8.md (--page) two tables: per element and mesh the draft at each inch of travel,
-the lift at the end and the draft over the last sixth of the travel (mean and spread); and
-what the travel cost (cells, remeshes, steps, Newton iterations, wall time, a remesh against a
-Newton iteration, and the plastic work's change by each transfer). A case that failed (a
-remesh that could not be made) or was interrupted shows how far it went. Copies the study's
-figures into docs/figures (--figures DIR). Loads in lb, travel in in.
+the lift at the end and the draft over the last sixth of the travel (mean, spread and
+slope); and what the travel cost (cells, remeshes, steps, Newton iterations, wall time, a
+remesh against a Newton iteration, and the plastic work's change by each transfer). A case
+that failed (a remesh that could not be made) or was interrupted shows how far it went.
+Copies the study's figures into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
 import shutil
+from types import SimpleNamespace
 
+from soilbin.app.plateau import steady_slope
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
@@ -34,14 +36,16 @@ def mesh_of(case, scene):
 def drafts(results, scene):
     lines = ["| element | element size [in] | travel [in] (status) | "
              + " | ".join(f"draft at {t:g} in [lb]" for t in TRAVELS)
-             + " | lift at the end [lb] | draft over the last sixth of the travel [lb] | its spread |",
-             "| --- | --- | --- | " + "--- | " * len(TRAVELS) + "--- | --- | --- |"]
+             + " | lift at the end [lb] | draft over the last sixth of the travel [lb] | its spread "
+             "| its slope [lb/in] |",
+             "| --- | --- | --- | " + "--- | " * len(TRAVELS) + "--- | --- | --- | --- |"]
     for case, summary, rows, _ in results:
         cells = [f"{d:.1f}" if (d := at(rows, "force", t)) is not None else "–" for t in TRAVELS]
         lines.append(f"| {mesh_of(case, scene)} | {rows[-1]['displacement']:.2f} "
                      f"({summary['status']}) | "
                      + " | ".join(cells) + f" | {rows[-1]['lift']:.1f} | "
-                     f"{summary['steady_draft']:.1f} | {100 * summary['steady_spread']:.1f}% |")
+                     f"{summary['steady_draft']:.1f} | {100 * summary['steady_spread']:.1f}% | "
+                     f"{steady_slope([SimpleNamespace(**row) for row in rows]):.0f} |")
     return "\n".join(lines)
 
 

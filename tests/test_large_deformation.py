@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from soilbin.app.collapse import collapse_limit, collapse_pressure
-from soilbin.app.plateau import steady_force, steady_spread
+from soilbin.app.plateau import steady_force, steady_slope, steady_spread
 from soilbin.records.scene import load_scene
 from soilbin.solver.stepping import StepRecord, run_load_steps
 from soilbin.tensors import from_mandel, rotation_matrix
@@ -220,6 +220,24 @@ def test_the_steady_force_is_the_mean_over_the_last_sixth_of_the_travel():
     mean = 0.5 * (at_5 + 12) * 0.5 + 0.5 * (12 + 6) * 0.5
     assert steady_force(uneven) == pytest.approx(mean, rel=1e-14)
     assert steady_spread(uneven) == pytest.approx((12 - 6) / mean, rel=1e-14)
+
+
+
+def test_the_steady_slope_is_the_rise_left_over_the_last_sixth_of_the_travel():
+    """The straight line fitted to the force over the plateau: a force rising at 3 per unit
+    displacement has slope 3 however its steps are cut; a steady force has none, a sawtooth
+    about a steady force nearly none."""
+    def travel(displacements, forces):
+        return [StepRecord(0, 0.0, d, f, 1, 0, 0, 0.0, (), {}) for d, f in zip(displacements,
+                                                                               forces)]
+    uneven = [0.5, 1.0, 4.0, 5.2, 5.25, 5.9, 6.0]
+    assert steady_slope(travel(uneven, [2 + 3 * d for d in uneven])) == pytest.approx(3.0,
+                                                                                     rel=1e-12)
+    assert steady_slope(travel([1, 2, 3, 4, 5, 6], [5, 8, 9, 10, 10, 10])) == pytest.approx(
+        0.0, abs=1e-12)
+    d = np.linspace(0.05, 6.0, 120)
+    saw = 10 + ((d / 0.1) % 1.0 - 0.5)   # teeth 0.1 long about 10, each rising at 10
+    assert abs(steady_slope(travel(d, saw))) < 0.01 * 10
 
 
 def test_force_control_until_collapse_ends_where_the_travel_runs_away():

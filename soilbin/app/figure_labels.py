@@ -39,7 +39,8 @@ HEADLINES = {
     Headline.PEAK_FORCE: ("peak ", "force"), Headline.FINAL_PRESSURE: ("", "pressure"),
     Headline.PEAK_PRESSURE: ("peak ", "pressure"),
     Headline.COLLAPSE_PRESSURE: ("collapse ", "pressure"), Headline.FINAL_LIFT: ("", "lift"),
-    Headline.STEADY_FORCE: ("steady ", "force"),   # steady_spread: a ratio
+    Headline.STEADY_FORCE: ("steady ", "force"),   # steady_spread: a ratio; steady_slope:
+                                                   # force per length, its key's words
 }
 
 #: Scene keys by their last part (a study's swept keys): (words, dimension).

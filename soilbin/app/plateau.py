@@ -1,6 +1,6 @@
 """The plateau of a long travel (a tool pushed several depths through the soil): the force
-averaged over the last part of the travel, and how much it still varies there, for the run's
-headline (``steady_force``, ``steady_spread``)."""
+averaged over the last part of the travel, how much it still varies there and how fast it
+still rises, for the run's headline (``steady_force``, ``steady_spread``, ``steady_slope``)."""
 import numpy as np
 
 #: The plateau is the last this fraction of the final displacement: the last inch of six.
@@ -32,3 +32,15 @@ def steady_spread(records):
     from a steady state."""
     _, f = plateau(records)
     return float((f.max() - f.min()) / steady_force(records))
+
+
+def steady_slope(records):
+    """The slope of the straight line fitted by least squares to the force over the plateau
+    (force per unit displacement; the curve between the steps taken as straight, sampled
+    evenly so that steps of any length weigh by their travel): zero on a steady state, the
+    rise that remains otherwise, apart from the curve's scatter about it."""
+    d, f = plateau(records)
+    if d[-1] <= d[0]:
+        return 0.0
+    x = np.linspace(d[0], d[-1], 201)
+    return float(np.polyfit(x, np.interp(x, d, f), 1)[0])

@@ -22,7 +22,7 @@ from .estimates import blade_of, draft_estimates
 from .insitu import check_initial_stress
 from .outdir import prepare_on_rank0
 from .output import RunFolder
-from .plateau import steady_force, steady_spread
+from .plateau import steady_force, steady_slope, steady_spread
 
 
 
@@ -78,6 +78,7 @@ def headline_results(scene, records):
         Headline.FINAL_LIFT: lambda: records[-1].columns["lift"],
         Headline.STEADY_FORCE: lambda: steady_force(records),
         Headline.STEADY_SPREAD: lambda: steady_spread(records),
+        Headline.STEADY_SLOPE: lambda: steady_slope(records),
     }
     values = {key: read[result.of]() for key, result in scene.headline.items()}
     return {key: None if value is None else value / scene.headline[key].divide_by

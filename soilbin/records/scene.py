@@ -79,7 +79,9 @@ class Headline(enum.Enum):
     The pressures are a loaded boundary's; ``final_lift`` is a tool's (the soil's
     upward force on it: a rough wall's friction). ``steady_force`` is the force averaged over
     the last sixth of the travel (the plateau of a tool pushed far: the steady draft over the
-    last inch of six), ``steady_spread`` its range there over that mean.
+    last inch of six), ``steady_spread`` its range there over that mean, ``steady_slope``
+    the slope of the straight line fitted to the force there (force per unit displacement:
+    zero on a steady state).
     """
     FINAL_DISPLACEMENT = "final_displacement"
     FINAL_PRESSURE = "final_pressure"
@@ -90,6 +92,7 @@ class Headline(enum.Enum):
     FINAL_LIFT = "final_lift"
     STEADY_FORCE = "steady_force"
     STEADY_SPREAD = "steady_spread"
+    STEADY_SLOPE = "steady_slope"
 
 
 #: Headline results read off a loaded boundary's pressure, and off a tool's lift.
