@@ -72,7 +72,7 @@ def test_plastic_flow_follows_the_potential(psi):
     stress = np.array([-3.0 * IDENTITY])
     sigma, _, new = model.update(deps, model.initial_state(1, stress))
     assert new["yield_state"][0] == S_CONE
-    deps_p = deps - (sigma - stress) @ model.compliance
+    deps_p = deps - model.elastic_strain(stress, sigma)
     eta, k = model.cone
     eta_g = 3.0 * Matching.COMPRESSION_CONE.coefficients(C_MC, psi)[0]
     assert trace(deps_p)[0] == pytest.approx(eta_g * SQRT2 * np.linalg.norm(deviator(deps_p)),

@@ -35,10 +35,6 @@ class IsotropicElasticity(Model):
     def stiffness(self):
         return elastic_stiffness(self.K, self.G)
 
-    @property
-    def compliance(self):
-        return P_VOL / (3.0 * self.K) + P_DEV / (2.0 * self.G)
-
     def trial(self, deps, stress):
         """Elastic predictor sigma_n + C_e : deps."""
         return stress + deps @ self.stiffness
