@@ -80,3 +80,39 @@ def test_a_limit_ends_the_run_after_the_step_that_reaches_it():
                             on_step=lambda r: None, limit=limit)
     assert not result.complete and result.limit_reached and result.message == "limit reached"
     assert [r.load_factor for r in result.steps] == [0.25, 0.5] and seen == [1, 2]
+
+
+class NarrowSteps(CollapsingProblem):
+    """Above load factor 0.25 a step converges only if it is at most 1/8 (in 3 iterations)."""
+
+    def solve(self):
+        self.solves += 1
+        if self.trial > 0.25 and self.trial - self.committed > 0.125 + 1e-12:
+            raise ConvergenceError("too large")
+        return NewtonResult(3, (1.0, 1e-3, 1e-9))
+
+
+@pytest.mark.parametrize("regrow_after_cut, cuts", [(0, 5), (2, 2), (5, 1)])
+def test_after_a_cut_the_increment_waits_for_easy_steps_to_grow(regrow_after_cut, cuts):
+    """Nominal quarters: past 0.25 every quarter fails. With the increment doubling at once
+    every eighth but the last is a cut; waiting for two easy eighths (the cut one included),
+    every third; for five, only the first."""
+    result = run_load_steps(NarrowSteps(limit=2.0), steps=4, max_cuts=3, on_step=lambda r: None,
+                            regrow_after_cut=regrow_after_cut)
+    assert result.complete
+    assert [r.load_factor for r in result.steps] == pytest.approx(
+        [0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0])
+    assert sum(r.cuts for r in result.steps) == cuts
+
+
+def test_a_resumed_run_keeps_waiting_after_a_cut():
+    """Stopped in the middle of the wait, the run goes on as if it had not stopped."""
+    whole = run_load_steps(NarrowSteps(limit=2.0), steps=4, max_cuts=3, on_step=lambda r: None,
+                           regrow_after_cut=5)
+    problem = NarrowSteps(limit=2.0)
+    problem.committed = whole.steps[3].load_factor
+    resumed = run_load_steps(problem, steps=4, max_cuts=3, on_step=lambda r: None,
+                             regrow_after_cut=5, resume=whole.steps[:4])
+    assert whole.steps[3].held > 0
+    assert [(r.load_factor, r.cuts) for r in resumed.steps] == [
+        (r.load_factor, r.cuts) for r in whole.steps]

@@ -158,6 +158,7 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     try:
         result = run_load_steps(stepped, loading.steps, loading.max_cuts, on_step, stops=stops,
                                 limit=collapse_limit(scene), first_cuts=loading.first_cuts,
+                                regrow_after_cut=loading.regrow_after_cut,
                                 resume=folder.records)
     except interrupt.Interrupted as signal:
         interrupted = signal

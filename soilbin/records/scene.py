@@ -155,6 +155,11 @@ class Loading(Params):
     first_cuts: int = param(0, lo=0, hi=30, doc="times the first step is halved before it is "
                                                "tried (the next ones double back after easy "
                                                "steps); at most max_cuts")
+    regrow_after_cut: int = param(0, lo=0, hi=100,
+                                  doc="steps converged in few Newton iterations (those after "
+                                      "which the increment doubles) at the size of a cut, the "
+                                      "cut step's own included, before the increment doubles "
+                                      "again; 0: at once")
     until_collapse: bool = param(False, doc="force control: the run ends normally at the soil's "
                                             "limit, the first step whose displacement per unit load "
                                             "is 100 times the secant one at the first nominal "

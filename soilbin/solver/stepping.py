@@ -9,7 +9,9 @@ force control, at the collapse load to that resolution). The next increment
 follows the last step's Newton iterations: it doubles (back toward the
 nominal one) after an easy step (at most ``EASY`` iterations), halves after
 a hard one (at least ``HARD``, before the next one fails), and stays
-otherwise. Every converged step is handed to
+otherwise; after a cut it grows again only once ``regrow_after_cut`` easy steps (the cut
+step's own included) have converged at the smaller size (0: at once), so that a load range
+where the larger step fails is not tried again at every step. Every converged step is handed to
 ``on_step`` at once, so a run that stops early leaves all its converged
 steps behind; its record carries the increment the stepper tries next, so
 that a run can go on from it (``resume``: the records of a run whose
@@ -76,6 +78,7 @@ class StepRecord:
     columns: dict = dataclasses.field(default_factory=dict)
     cut_reason: str = ""    # why the last attempt of this step that was cut failed
     next_increment: float = 0.0   # the load factor's increment the stepper tries next
+    held: int = 0           # easy steps still to converge before the increment may grow
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,19 +90,21 @@ class StepperResult:
 
 
 def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter,
-                   stops=(), limit=None, first_cuts=0, resume=()):
+                   stops=(), limit=None, first_cuts=0, resume=(), regrow_after_cut=0):
     """Drive ``problem`` to load factor 1, a step ending on each of ``stops`` (load factors);
     ``limit(records)``, if given, returns why the run ends after the last record, or None.
     ``resume``: the records of the steps already taken (the problem at the last one's state);
     the run goes on from there, its records following them."""
     nominal = 1.0 / steps
     level, factor = first_cuts, 0.0      # increment = nominal / 2**level
+    held = 0                             # easy steps to wait before the increment grows
     cuts, failed, reason = 0, 0, ""
     records, start = list(resume), clock()
     if records:
         last = records[-1]
         factor, start = last.load_factor, start - last.wall_s
         level = round(math.log2(nominal / last.next_increment))
+        held = last.held
     while factor < 1.0 - 1e-12:
         increment = min(nominal / 2**level, 1.0 - factor)
         stop = min((s for s in stops if s > factor + 1e-12), default=None)
@@ -118,17 +123,20 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
                                      f"smallest increment, 1/{steps * 2**max_cuts} ({err})")
             cuts += 1
             level += 1
+            held = regrow_after_cut
             continue
         factor += increment
         problem.commit()
         seen = problem.observe()
-        if result.iterations <= EASY:
+        if result.iterations <= EASY and held:
+            held -= 1
+        elif result.iterations <= EASY:
             level = max(level - 1, 0)
         elif result.iterations >= HARD:
             level = min(level + 1, max_cuts)
         record = StepRecord(len(records) + 1, factor, seen.displacement, seen.force,
                             result.iterations, cuts, failed, clock() - start, result.residuals,
-                            seen.columns, reason, nominal / 2**level)
+                            seen.columns, reason, nominal / 2**level, held)
         records.append(record)
         on_step(record)
         ended = limit(records) if limit is not None else None
