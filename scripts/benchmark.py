@@ -123,7 +123,8 @@ def run_case(scene_name, overrides):
     problem = SoilProblem(scene, scene_mesh(scene, MPI.COMM_WORLD))
     setup = time.process_time() - start
     result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None,
-                            limit=collapse_limit(scene), first_cuts=scene.loading.first_cuts)
+                            limit=collapse_limit(scene), first_cuts=scene.loading.first_cuts,
+                            regrow_after_cut=scene.loading.regrow_after_cut)
     solve = time.process_time() - start - setup
     newton, linear = problem.newton.stats, problem.newton.linear.stats
     kind, value = result_value(scene, result.steps) if result.steps else ("", None)

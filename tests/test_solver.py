@@ -208,6 +208,7 @@ def test_regions_of_interleaved_cells_update_as_one_region():
     two = MaterialPoints(problem.disc, problem.w, problem.w_committed,
                          problem.kinematics.strain_increment(), split,
                          {"even": model, "odd": model})
+    two.start()
     assert isinstance(one._parts[name], slice)
     assert all(isinstance(part, np.ndarray) for part in two._parts.values())
     rng = np.random.default_rng(3)

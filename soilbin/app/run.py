@@ -15,6 +15,7 @@ from ..problem import SoilProblem
 from ..records.scene import Headline
 from ..remesh import RemeshError, Remeshing
 from ..remesh.mesher import read_mesh
+from ..solver.ahead import compiled_ahead
 from ..solver.stepping import StepperResult, run_load_steps
 from . import checkpoint, figures, figures_3d, interrupt, section_figures
 from .collapse import collapse_limit, collapse_pressure
@@ -94,7 +95,16 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     iterate, ``remesh_progress(report)`` after a step's remesh. ``resume``: a stopped run's
     folder to go on from (its checkpoint, ``app.checkpoint``). SIGINT or SIGTERM during the
     steps ends the run with status "interrupted" (summary written, no collective call after
-    it)."""
+    it). The models' kernels compile (or load from numba's cache) in a thread meanwhile
+    (:mod:`soilbin.solver.ahead`)."""
+    models = [scene.materials[material] for material in dict.fromkeys(scene.regions.values())]
+    with compiled_ahead(models, scene.tool and scene.tool.law):
+        return _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress,
+                    remesh_progress)
+
+
+def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, remesh_progress):
+    """:func:`run_scene`'s run."""
     start, start_cpu = time.perf_counter(), time.process_time()
     if resume is not None and Path(resume).resolve() == Path(out_dir).resolve():
         raise InputError(f"--resume {resume}: give the resumed run another --out (this "
@@ -106,9 +116,9 @@ def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), 
     with interrupt.kept():
         tagged = (scene_mesh(scene, comm) if not remeshed else
                   resumed_mesh(comm, earlier, out_dir, scene.analysis.element.dimension))
+    problem = SoilProblem(scene, tagged)   # its forms compile while the kernels do
     if not remeshed:   # a remeshed soil has risen above its ground level: its state is stored
         check_initial_stress(scene, tagged)
-    problem = SoilProblem(scene, tagged)
     problem.newton.on_iterate = iterate_progress
     if remeshed:   # the remeshed mesh as made, then moved by the steps after the remesh
         remeshing.restore(earlier.remeshing_state(), earlier.mesh["file"], CellLayout(problem))

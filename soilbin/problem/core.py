@@ -42,8 +42,6 @@ class SoilProblem:
         self.kinematics = kinematics_of(scene.analysis, disc, self.w, self.w_committed)
         self.quality = MeshQuality(mesh) if self.kinematics.moves_mesh else None
         self.points = self._material_points()
-        if scene.geostatic is not None and disc.element.mixed:
-            start_mean_pressure(disc, self.points, self.w, self.w_committed)
 
         v = ufl.TestFunction(disc.space)
         self.supports = Supports(scene, tagged_mesh, disc)
@@ -59,6 +57,10 @@ class SoilProblem:
                        self.drive if self.drive is not self.tool and self.drive.indirect else None)
         self.bcs = self.supports.bcs
         self.newton = self._newton(v)
+        # the models' first call after the forms: they compile while its kernels do
+        self.points.start()
+        if scene.geostatic is not None and disc.element.mixed:
+            start_mean_pressure(disc, self.points, self.w, self.w_committed)
         if self.border is not None and self.border is not self.tool:
             self.drive.calibrate(self.newton.tangent_solve)
         self._factor, self._factors, self._border_values = 0.0, (0.0, 0.0), (0.0, 0.0)

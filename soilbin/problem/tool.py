@@ -50,9 +50,8 @@ class RigidTool:
         self.travel = self._committed_travel = 0.0   # along the loading direction
         self._target = 0.0                            # the draft, under force control
         geostatic = scene.geostatic
-        law = tool.interface.bonded() if tool.bonded else tool.interface
         self.interface = RigidToolContact(
-            disc, w, tagged.facet_tags, [tagged.boundaries[f] for f in tool.faces], law,
+            disc, w, tagged.facet_tags, [tagged.boundaries[f] for f in tool.faces], tool.law,
             supports.bcs, direction, incremental=kinematics.incremental,
             initial_stress=geostatic and geostatic.stress)
         self.nodal_terms = [self.interface]

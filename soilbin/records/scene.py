@@ -211,6 +211,11 @@ class Tool(Params):
             raise InputError("interface: a [tool.interface] table is required (its penalty "
                              "stiffnesses k_n, k_s also tie a bonded tool)")
 
+    @property
+    def law(self):
+        """The contact law: the interface, or its springs alone where the tool is bonded."""
+        return self.interface.bonded() if self.bonded else self.interface
+
 
 @dataclasses.dataclass(frozen=True)
 class Analysis(Params):

@@ -102,7 +102,13 @@ class MaterialPoints:
         self._converged_tangent = None
         self.tangent_floor = 0.0
         self.floor_tangent(tangent_floor)
-        self.update()   # zero increment: the initial stress and the elastic tangent
+
+    def start(self):
+        """The first update, at zero increment: the initial stress and the elastic tangent,
+        the last converged one of the first step. Apart from the constructor, so that a
+        problem can build (compile) its forms before the models' kernels are first called
+        (:mod:`soilbin.solver.ahead`)."""
+        self.update()
         self._converged_tangent = self._tangent.copy()
 
     def floor_tangent(self, eps):

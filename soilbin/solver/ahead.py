@@ -1,0 +1,68 @@
+"""A run's constitutive kernels made ready ahead of their first call, in a thread.
+
+numba compiles a kernel at its first call and keeps the machine code in its disk cache
+(:mod:`soilbin.models.jit`). Where that cache is empty (a fresh checkout before ``make
+setup``, a changed model) a run compiles its model's kernels at the first update: the
+modified cap's take 6-7 s, mostly numba's type inference (Python), after the mesh and 4 s
+of forms (FFCx's Python and gcc). :func:`compiled_ahead` compiles them in a thread from the
+start of the run instead, and a problem builds its forms before it first updates its
+models (:meth:`.quadrature.MaterialPoints.start`), so that the two overlap where one of them
+is outside Python (gcc, gmsh, LLVM): both threads' Python shares one interpreter lock. On
+the tine the first run on empty caches took 23.5-24.3 s before, 20.5-21.9 s with the thread
+(docs/performance.md). Where the cache is warm the thread only loads the kernels from it.
+
+The kernels are compiled by calling them as the run will: one update of one point of each
+region's model from its initial state, its plastic work, one traction update of the tool's
+interface. numba's compiler lock makes a main thread that calls a kernel meanwhile wait for
+it rather than compile it twice. The assembler's loops (:mod:`.assembly`) compile on the
+main thread.
+"""
+import contextlib
+import threading
+
+import numpy as np
+
+from ..models.base import blocks_symmetric
+
+
+def compile_model(model):
+    """Compile ``model``'s kernels (or load them from the cache): the update of one point from
+    its initial state, with a guess (as Newton's iterates call it), the symmetry check of its
+    tangent (the linear solver's) and its plastic work."""
+    state, deps = model.initial_state(1), np.zeros((1, 6))
+    sigma, tangent, _ = model.update(deps, state, guess=model.initial_state(1))
+    blocks_symmetric(tangent, 1e-9, 1e-12)
+    model.plastic_work(deps, state["stress"], sigma)
+
+
+def compile_interface(interface):
+    """Compile the interface law's kernels: one traction update of one closed point."""
+    interface.traction_update(np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]),
+                              interface.initial_state(1))
+
+
+def compile_run_kernels(models, interface=None):
+    """Compile the kernels that a run of ``models`` and ``interface`` (or None) calls."""
+    for model in models:
+        compile_model(model)
+    if interface is not None:
+        compile_interface(interface)
+
+
+@contextlib.contextmanager
+def compiled_ahead(models, interface=None):
+    """:func:`compile_run_kernels` in a thread while the block runs; the block's end waits
+    for it (a process does not exit in numba's compiler). A compilation that fails in the
+    thread is left to the run's own call to report."""
+    def compile_all():
+        try:
+            compile_run_kernels(models, interface)
+        except Exception:   # the run's first call compiles again and raises it there
+            pass
+
+    thread = threading.Thread(target=compile_all, name="soilbin-kernels", daemon=True)
+    thread.start()
+    try:
+        yield thread
+    finally:
+        thread.join()
