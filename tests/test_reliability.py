@@ -158,6 +158,22 @@ def test_an_in_situ_stress_outside_the_yield_surface_is_refused_before_the_steps
     assert not (tmp_path / "c" / "curve.csv").exists()
 
 
+def test_a_first_update_failing_on_an_in_situ_stress_outside_the_yield_surface_says_so(
+        capsys, tmp_path, monkeypatch):
+    """The problem is built (its forms) before the in-situ stress is checked: a return that
+    fails there is reported as the input's fault."""
+    from soilbin.errors import ReturnMapError
+    from soilbin.solver.quadrature import MaterialPoints
+
+    def failing(points):
+        raise ReturnMapError("local stress update failed (non-finite result)")
+    monkeypatch.setattr(MaterialPoints, "start", failing)
+    status, _, err = run_main(capsys, "run", "container-footing", "--out", tmp_path / "c",
+                              "--set", "regions.soil=vm", "--set",
+                              'materials.vm={model="von_mises", E=4000.0, nu=0.35, c=0.05}')
+    assert status == 2 and "lies outside the yield surface of materials.vm" in err
+
+
 def test_keys_lists_every_settable_key_and_each_one_sets(capsys):
     status, out, _ = run_main(capsys, "keys", "tine-2in-90deg")
     assert status == 0 and "units: lb, in" in out.splitlines()[0]

@@ -8,7 +8,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from ..closed_form import NoWedge
-from ..errors import InputError
+from ..errors import InputError, ReturnMapError
 from ..layout import CellLayout
 from ..meshes import scene_mesh
 from ..problem import SoilProblem
@@ -86,6 +86,22 @@ def headline_results(scene, records):
             for key, value in values.items()}
 
 
+def _checked_problem(scene, tagged, check):
+    """The scene's problem on ``tagged``, and (``check``) its in-situ stress checked against
+    the yield surfaces after the problem's forms are built (they compile while the kernels
+    do, :mod:`soilbin.solver.ahead`); a first update that fails on an in-situ stress outside
+    them is reported as that."""
+    try:
+        problem = SoilProblem(scene, tagged)
+    except ReturnMapError:
+        if check:
+            check_initial_stress(scene, tagged)
+        raise
+    if check:
+        check_initial_stress(scene, tagged)
+    return problem
+
+
 def run_scene(scene, out_dir, comm=MPI.COMM_WORLD, progress=None, overrides=(), resume=None,
               iterate_progress=None, remesh_progress=None):
     """Solve ``scene``, writing into ``out_dir`` (checked writable and cleared of an older
@@ -116,9 +132,8 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
     with interrupt.kept():
         tagged = (scene_mesh(scene, comm) if not remeshed else
                   resumed_mesh(comm, earlier, out_dir, scene.analysis.element.dimension))
-    problem = SoilProblem(scene, tagged)   # its forms compile while the kernels do
-    if not remeshed:   # a remeshed soil has risen above its ground level: its state is stored
-        check_initial_stress(scene, tagged)
+    # a remeshed soil has risen above its ground level: its state is stored, not checked
+    problem = _checked_problem(scene, tagged, check=not remeshed)
     problem.newton.on_iterate = iterate_progress
     if remeshed:   # the remeshed mesh as made, then moved by the steps after the remesh
         remeshing.restore(earlier.remeshing_state(), earlier.mesh["file"], CellLayout(problem))
