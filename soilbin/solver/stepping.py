@@ -9,11 +9,12 @@ force control, at the collapse load to that resolution). The next increment
 follows the last step's Newton iterations: it doubles (back toward the
 nominal one) after an easy step (at most ``EASY`` iterations), halves after
 a hard one (at least ``HARD``, before the next one fails), and stays
-otherwise; after a cut it grows again only once ``regrow_after_cut`` easy steps (the cut
-step's own included) have converged at the smaller size (0: at once), so that a load range
-where the larger step fails is not tried again at every step. Every converged step is handed to
-``on_step`` at once, so a run that stops early leaves all its converged
-steps behind; its record carries the increment the stepper tries next, so
+otherwise. After a cut it doubles again only once ``regrow_after_cut`` easy
+steps (the cut step's own included) have converged at the smaller size (0: at
+once), so that a load range where the larger step fails is not tried again at
+every step. Every converged step is handed to ``on_step`` at once, so a run
+that stops early leaves all its converged steps behind; its record carries the
+increment the stepper tries next and the easy steps it still waits for, so
 that a run can go on from it (``resume``: the records of a run whose
 problem state was restored to its last step). A ``limit`` callback, asked after every converged step, may end
 the run early with its message (under force control: the soil's limit is
