@@ -113,7 +113,7 @@ def run_case(scene_name, overrides):
     """Solve one case in this process; returns its measurements."""
     start = time.process_time()
     from mpi4py import MPI
-    from soilbin.app.collapse import collapse_limit
+    from soilbin.app.collapse import stepping
     from soilbin.meshes import scene_mesh
     from soilbin.problem import SoilProblem
     from soilbin.records.scene import load_scene
@@ -122,9 +122,7 @@ def run_case(scene_name, overrides):
     scene = load_scene(ROOT / "scenes" / f"{scene_name}.toml", overrides)
     problem = SoilProblem(scene, scene_mesh(scene, MPI.COMM_WORLD))
     setup = time.process_time() - start
-    result = run_load_steps(problem, scene.loading.steps, scene.loading.max_cuts, lambda r: None,
-                            limit=collapse_limit(scene), first_cuts=scene.loading.first_cuts,
-                            regrow_after_cut=scene.loading.regrow_after_cut)
+    result = run_load_steps(problem, on_step=lambda r: None, **stepping(scene))
     solve = time.process_time() - start - setup
     newton, linear = problem.newton.stats, problem.newton.linear.stats
     kind, value = result_value(scene, result.steps) if result.steps else ("", None)

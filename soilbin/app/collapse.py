@@ -1,6 +1,7 @@
 """The soil's limit under force control: the first step whose displacement per unit of load
 increment runs away (COLLAPSE_COMPLIANCE times a secant compliance), for the run's headline
-and to end a run that has reached it."""
+and to end a run that has reached it; the load stepper's settings of a scene, that limit
+among them."""
 from ..records.scene import COLLAPSE_COMPLIANCE, Control
 
 
@@ -49,3 +50,11 @@ def collapse_limit(scene):
                 f"step {last.step} is at least {COLLAPSE_COMPLIANCE:g} times the secant one at "
                 f"load {loads[reference]:.6g} (displacement {last.displacement:.6g})")
     return limit
+
+
+def stepping(scene):
+    """The load stepper's settings of ``scene``: ``run_load_steps``'s keywords but the problem,
+    ``on_step``, ``stops`` and ``resume``."""
+    loading = scene.loading
+    return dict(steps=loading.steps, max_cuts=loading.max_cuts, limit=collapse_limit(scene),
+                first_cuts=loading.first_cuts, regrow_after_cut=loading.regrow_after_cut)

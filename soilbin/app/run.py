@@ -18,7 +18,7 @@ from ..remesh.mesher import read_mesh
 from ..solver.ahead import compiled_ahead
 from ..solver.stepping import StepperResult, run_load_steps
 from . import checkpoint, figures, figures_3d, interrupt, section_figures
-from .collapse import collapse_limit, collapse_pressure
+from .collapse import collapse_pressure, stepping
 from .estimates import blade_of, draft_estimates
 from .insitu import check_initial_stress
 from .outdir import prepare_on_rank0
@@ -181,10 +181,8 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
     loading = scene.loading
     interrupted = None
     try:
-        result = run_load_steps(stepped, loading.steps, loading.max_cuts, on_step, stops=stops,
-                                limit=collapse_limit(scene), first_cuts=loading.first_cuts,
-                                regrow_after_cut=loading.regrow_after_cut,
-                                resume=folder.records)
+        result = run_load_steps(stepped, on_step=on_step, stops=stops, resume=folder.records,
+                                **stepping(scene))
     except interrupt.Interrupted as signal:
         interrupted = signal
         result = StepperResult(tuple(folder.records), False,

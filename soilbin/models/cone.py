@@ -59,10 +59,8 @@ from ..params import param
 from ..tensors import IDENTITY, P_DEV, P_VOL, SQRT2
 from .base import APEX, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
 from .elastic import IsotropicElasticity
+from .invariant_return import YIELD_TOL
 from .jit import kernel
-
-#: Trial states with f_tr below this fraction of the stress scale are elastic.
-YIELD_TOL = 1e-12
 
 
 def tension_cutoff_param():
