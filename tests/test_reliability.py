@@ -90,6 +90,23 @@ def test_a_signal_ends_the_run_with_a_summary_and_128_plus_its_number(capsys, mo
     assert len(read_series(tmp_path / "b" / "fields.xdmf")[2]) == 3
 
 
+def test_ctrl_c_ends_a_run_with_a_summary_in_a_process_that_imports_gmsh_itself(tmp_path):
+    """gmsh sets SIGINT's handler to the default when it is first imported (by the run's own
+    imports, in a fresh process): SIGINT after the second step still ends the run as above."""
+    run = subprocess.Popen([str(SOILBIN), "run", "strip-footing-von-mises", "--set",
+                            "loading.steps=200", "--out", str(tmp_path / "f")],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           env=dict(os.environ, OMP_NUM_THREADS="1"))
+    for line in run.stderr:
+        if line.startswith("step   2 "):
+            run.send_signal(signal.SIGINT)
+            break
+    _, err = run.communicate(timeout=300)
+    assert run.returncode == 128 + signal.SIGINT and "interrupted by SIGINT" in err
+    summary = json.loads((tmp_path / "f" / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["n_steps"] >= 2
+
+
 def test_a_run_into_an_old_run_folder_leaves_none_of_its_files(capsys, tmp_path):
     out = tmp_path / "old"
     (out / "fields").mkdir(parents=True)

@@ -271,7 +271,8 @@ class _IterateProgress:
 def _run(args):
     from mpi4py import MPI
     from ..records.scene import load_scene
-    from .run import run_scene
+    with interrupt.kept():   # gmsh's import (the remesher's) sets SIGINT's handler to the default
+        from .run import run_scene
 
     scene = load_scene(scene_path(args.scene), args.overrides)
     out = args.out or Path("runs") / scene.name
