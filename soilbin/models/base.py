@@ -71,6 +71,15 @@ def blocks_symmetric(blocks, rtol, atol):
     return True
 
 
+def exercise(model, deps, state, guess):
+    """One update of ``model`` by ``deps`` (n, 6) from ``state`` with ``guess`` (as Newton's
+    iterates call it), the linear solver's symmetry check of its tangent and its plastic
+    work: every kernel of the model a run calls, compiled (or loaded from numba's cache)."""
+    sigma, tangent, _ = model.update(deps, state, guess=guess)
+    blocks_symmetric(tangent, 1e-9, 1e-12)
+    model.plastic_work(deps, state["stress"], sigma)
+
+
 @dataclasses.dataclass(frozen=True)
 class Sample:
     """One point of a model's conformance suite: from the committed ``stress``

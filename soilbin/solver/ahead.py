@@ -3,17 +3,17 @@
 numba compiles a kernel at its first call and keeps the machine code in its disk cache
 (:mod:`soilbin.models.jit`). Where that cache is empty (a fresh checkout before ``make
 setup``, a changed model) a run compiles its model's kernels at the first update: the
-modified cap's take 6-7 s, mostly numba's type inference (Python), after the mesh and 4 s
+modified cap's take 6-9 s, mostly numba's type inference (Python), after the mesh and 4 s
 of forms (FFCx's Python and gcc). :func:`compiled_ahead` compiles them in a thread from the
 start of the run instead, and a problem builds its forms before it first updates its
 models (:meth:`.quadrature.MaterialPoints.start`), so that the two overlap where one of them
-is outside Python (gcc, gmsh, LLVM): both threads' Python shares one interpreter lock. On
-the tine the first run on empty caches took 23.5-24.3 s before, 20.5-21.9 s with the thread
-(docs/performance.md). Where the cache is warm the thread only loads the kernels from it.
+is outside Python (gcc, gmsh, LLVM): both threads' Python shares one interpreter lock
+(measured in docs/performance.md, *The first run and start-up*). Where the cache is warm
+the thread only loads the kernels from it.
 
 The kernels are compiled by calling them as the run will: one update of one point of each
-region's model from its initial state, its plastic work, one traction update of the tool's
-interface. numba's compiler lock makes a main thread that calls a kernel meanwhile wait for
+region's model from its initial state with its tangent's symmetry check and its plastic
+work, one traction update of the tool's interface. numba's compiler lock makes a main thread that calls a kernel meanwhile wait for
 it rather than compile it twice. The assembler's loops (:mod:`.assembly`) compile on the
 main thread.
 """
@@ -22,17 +22,13 @@ import threading
 
 import numpy as np
 
-from ..models.base import blocks_symmetric
+from ..models.base import exercise
 
 
 def compile_model(model):
-    """Compile ``model``'s kernels (or load them from the cache): the update of one point from
-    its initial state, with a guess (as Newton's iterates call it), the symmetry check of its
-    tangent (the linear solver's) and its plastic work."""
-    state, deps = model.initial_state(1), np.zeros((1, 6))
-    sigma, tangent, _ = model.update(deps, state, guess=model.initial_state(1))
-    blocks_symmetric(tangent, 1e-9, 1e-12)
-    model.plastic_work(deps, state["stress"], sigma)
+    """Compile ``model``'s kernels (or load them from the cache) on one point at its initial
+    state (:func:`~soilbin.models.base.exercise`)."""
+    exercise(model, np.zeros((1, 6)), model.initial_state(1), model.initial_state(1))
 
 
 def compile_interface(interface):
