@@ -12,7 +12,8 @@ the tine reports its draft at the final travel (no closed form).
 
 The results go to ``runs/benchmark/results.json`` and ``results.md``, and
 between the benchmark markers of docs/performance.md (--page PATH; a run of
---quick or --only without --update writes no page unless --page names one).
+--quick or --only without --update writes no page unless --page names one;
+--update keeps the page's rows of the cases it does not run).
 """
 import argparse
 import json
@@ -147,31 +148,53 @@ def measure(name, scene, overrides):
     return {"case": name, "overrides": overrides, **json.loads(proc.stdout.strip().splitlines()[-1])}
 
 
-def markdown(results, command, again=None):
-    def row(cells):
-        return "| " + " | ".join(map(str, cells)) + " |"
-    head = ["case", "element", "linear solver", "dofs", "load steps", "Newton (failed)",
-            "CPU solve (s)", "CPU total (s)", "memory (MB)", "error (%) or draft (lb)"]
-    lines = [row(head), row(["---"] * len(head))]
-    for r in results:
-        value = "failed" if r["value"] is None else (
-            f"{r['value']:+.3g}" if r["kind"] == "error %" else f"{r['value']:.1f} lb")
-        newton = f"{r['iterations']} ({r['failed']})"
-        if not r["complete"]:
-            value += " (collapse)" if r["until_collapse"] else " (incomplete)"
-        lines.append(row([r["case"], r["element"], r["solver"], r["dofs"], r["steps"], newton,
-                          f"{r['solve_s']:.2f}", f"{r['setup_s'] + r['solve_s']:.2f}",
-                          f"{r['memory_MB']:.0f}", value]))
-    cost = ["case", "dofs", "factorisation / set-up", "assembly", "constitutive update",
-            "solves", "Krylov its / solve"]
-    lines += ["", "CPU milliseconds per Newton iteration (converged and failed):", "",
-              row(cost), row(["---"] * len(cost))]
-    for r in results:
-        n = max(r["iterations"] + r["failed"], 1)
-        per = [f"{1000 * r[k] / n:.1f}" for k in ("factorisation_s", "assembly_s", "constitutive_s",
-                                                   "linear_solve_s")]
-        krylov = f"{r['krylov'] / n:.0f}" if r["krylov"] else "-"
-        lines.append(row([r["case"], r["dofs"], *per, krylov]))
+def row(cells):
+    return "| " + " | ".join(map(str, cells)) + " |"
+
+
+HEAD = ["case", "element", "linear solver", "dofs", "load steps", "Newton (failed)",
+        "CPU solve (s)", "CPU total (s)", "memory (MB)", "error (%) or draft (lb)"]
+COST = ["case", "dofs", "factorisation / set-up", "assembly", "constitutive update", "solves",
+        "Krylov its / solve"]
+COST_TITLE = "CPU milliseconds per Newton iteration (converged and failed):"
+
+
+def table_rows(r):
+    """A case's (row of the first table, row of the per-iteration table)."""
+    value = "failed" if r["value"] is None else (
+        f"{r['value']:+.3g}" if r["kind"] == "error %" else f"{r['value']:.1f} lb")
+    if not r["complete"]:
+        value += " (collapse)" if r["until_collapse"] else " (incomplete)"
+    n = max(r["iterations"] + r["failed"], 1)
+    per = [f"{1000 * r[k] / n:.1f}" for k in ("factorisation_s", "assembly_s", "constitutive_s",
+                                               "linear_solve_s")]
+    krylov = f"{r['krylov'] / n:.0f}" if r["krylov"] else "-"
+    return (row([r["case"], r["element"], r["solver"], r["dofs"], r["steps"],
+                 f"{r['iterations']} ({r['failed']})", f"{r['solve_s']:.2f}",
+                 f"{r['setup_s'] + r['solve_s']:.2f}", f"{r['memory_MB']:.0f}", value]),
+            row([r["case"], r["dofs"], *per, krylov]))
+
+
+AGAIN = "; rows measured again by "
+
+
+def page_rows(page, names):
+    """The rows of the cases ``names`` in ``page``'s benchmark block, in its order: case ->
+    (row of the first table, row of the per-iteration table), as the page holds them; and the
+    commands that measured rows again, as its last line names them (None if none)."""
+    block = page.read_text().split("<!-- benchmark:start -->")[1].split("<!-- benchmark:end -->")[0]
+    first, cost = ({line.split(" | ")[0][2:]: line for line in part.splitlines()
+                    if line.startswith("| ")} for part in block.split(COST_TITLE))
+    again = block.strip().splitlines()[-1].partition(AGAIN)[2] or None
+    return {name: (line, cost[name]) for name, line in first.items()
+            if name in names and name in cost}, again
+
+
+def markdown(rows, command, again=None):
+    """The block: ``rows`` a list of :func:`table_rows`; ``again`` the commands (in
+    backquotes) that measured some of them again."""
+    lines = [row(HEAD), row(["---"] * len(HEAD)), *(first for first, _ in rows),
+             "", COST_TITLE, "", row(COST), row(["---"] * len(COST)), *(cost for _, cost in rows)]
     cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo")
                 if line.startswith("model name")), "unknown CPU")
     lines += ["", "Newton (failed): iterations of converged steps (of attempts that were cut). "
@@ -179,7 +202,7 @@ def markdown(results, command, again=None):
               "form compilation + solve); memory = peak resident set. Serial runs on a machine "
               "shared with other jobs (CPU time, not wall time, is comparable).",
               f"Machine: nproc {len(os.sched_getaffinity(0))}, {cpu}; "
-              f"command: `{command}`" + (f"; rows measured again by `{again}`" if again else "")]
+              f"command: `{command}`" + (AGAIN + again if again else "")]
     return "\n".join(lines) + "\n"
 
 
@@ -190,8 +213,8 @@ def main():
     parser.add_argument("--only", nargs="+", metavar="TEXT",
                         help="only the cases whose name contains one of these")
     parser.add_argument("--update", action="store_true",
-                        help="keep the other cases of the results file in --out (those still "
-                             "among the cases), replace these")
+                        help="keep the page's rows of the other cases (those still among the "
+                             "cases), replace these")
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "benchmark")
     parser.add_argument("--case", nargs="+", metavar=("SCENE", "OVERRIDE"),
                         help="run one case in this process and print its JSON")
@@ -201,9 +224,6 @@ def main():
     if args.case:
         print(json.dumps(run_case(args.case[0], args.case[1:])))
         return
-    if args.update and not (args.out / "results.json").is_file():
-        sys.exit(f"--update keeps the other cases of {args.out / 'results.json'}, which does "
-                 f"not exist: run without --update first (or give its --out)")
     results = []
     for name, scene, overrides in cases(args.quick):
         if args.only and not any(text in name for text in args.only):
@@ -212,16 +232,17 @@ def main():
         r = results[-1]
         print(f"{name}: {r['dofs']} dofs, {r['iterations']} ({r['failed']}) Newton, "
               f"{r['solve_s']:.2f} s solve, {r['value']}", file=sys.stderr, flush=True)
-    if args.update:   # the file's other cases that are still cases, and these
-        fresh = {r["case"]: r for r in results}
-        known = {name for name, _, _ in cases(quick=False)} | {name for name, _, _ in cases(quick=True)}
-        kept = [r for r in json.loads((args.out / "results.json").read_text()) if r["case"] in known]
-        results = [fresh.pop(r["case"], r) for r in kept] + list(fresh.values())
     command = " ".join(["OMP_NUM_THREADS=1 python", *sys.argv])
-    if args.update:   # a whole run's table with some of its rows measured again
-        text = markdown(results, "OMP_NUM_THREADS=1 python scripts/benchmark.py", again=command)
+    if args.update:   # the page's rows of the other cases that are still cases, as they stand
+        known = {name for quick in (False, True) for name, _, _ in cases(quick)}
+        fresh = {r["case"]: table_rows(r) for r in results}
+        kept, again = page_rows(page, known)
+        rows = [fresh.pop(name, None) or row for name, row in kept.items()] + list(fresh.values())
+        # a whole run's table with some of its rows measured again
+        text = markdown(rows, "OMP_NUM_THREADS=1 python scripts/benchmark.py",
+                        again=(again + ", then " if again else "") + f"`{command}`")
     else:
-        text = markdown(results, command)
+        text = markdown([table_rows(r) for r in results], command)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "results.json").write_text(json.dumps(results, indent=1))
     (args.out / "results.md").write_text(text)

@@ -1,6 +1,8 @@
-"""The user guide's scene table, model list and builder list are those of the code, and its
-default of `make run` is the Makefile's."""
+"""The user guide's scene table, model list and builder list are those of the code, its
+default of `make run` is the Makefile's, and the performance page's benchmark block is what
+the benchmark writes from its rows."""
 import re
+import sys
 
 from soilbin.meshes import BUILDERS
 from soilbin.models import MODELS
@@ -34,3 +36,29 @@ def test_the_model_list_is_the_registry():
 
 def test_the_builder_list_is_the_catalogue():
     assert section_names("### Mesh builders", r"^- `(\w+)`:") == list(BUILDERS)
+
+
+def test_the_benchmark_block_is_rebuilt_from_its_own_rows():
+    """`scripts/benchmark.py --update` keeps the page's rows of the cases it does not run: the
+    block read back and written again from them is the block, every row a case's, and a
+    measured case's row is the one written from its results."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import benchmark
+    page = ROOT / "docs" / "performance.md"
+    block = page.read_text().split("<!-- benchmark:start -->\n")[1].split("<!-- benchmark:end -->")[0]
+    names = {name for quick in (False, True) for name, _, _ in benchmark.cases(quick)}
+    rows, again = benchmark.page_rows(page, names)
+    first = [line for line in block.split(benchmark.COST_TITLE)[0].splitlines()
+             if line.startswith("| ")]
+    assert len(rows) == len(first) - 2   # the heading and the rule
+    assert benchmark.markdown(list(rows.values()), "OMP_NUM_THREADS=1 python "
+                              "scripts/benchmark.py", again) == block
+    name = next(iter(rows))
+    measured = dict(case=name, element="hex8", solver="LU", dofs=10, steps=2, iterations=7,
+                    failed=1, solve_s=0.5, setup_s=1.25, memory_MB=200.4, kind="error %",
+                    value=0.0123, complete=True, until_collapse=False, krylov=0,
+                    factorisation_s=0.008, assembly_s=0.004, constitutive_s=0.002,
+                    linear_solve_s=0.001)
+    assert benchmark.table_rows(measured) == (
+        f"| {name} | hex8 | LU | 10 | 2 | 7 (1) | 0.50 | 1.75 | 200 | +0.0123 |",
+        f"| {name} | 10 | 1.0 | 0.5 | 0.2 | 0.1 | - |")
