@@ -64,6 +64,9 @@ def study_file(tmp_path, text, name="study.toml"):
     (COLUMN + '[table]\ncolumns = ["E", "top_settlement"]\n', "table.columns[0] = 'E'"),
     (COLUMN + "[set\n", "TOML syntax error"),
     (COLUMN + "[[case]]\nlabel = 3\n", "case[0].label: expected a string, got 3"),
+    (COLUMN + FIGURES.replace('name = "curves"', 'name = "../x/curves"'),
+     "figures[1].name = '../x/curves': expected a file name in the study folder"),
+    (COLUMN + FIGURES.replace('name = "curves"', 'name = ".."'), "figures[1].name = '..'"),
 ])
 def test_bad_study_is_one_line_naming_file_and_key(capsys, tmp_path, text, expected):
     path = study_file(tmp_path, text)
@@ -72,6 +75,18 @@ def test_bad_study_is_one_line_naming_file_and_key(capsys, tmp_path, text, expec
     assert status == 2
     assert f"{path}: " in err and expected in err
     assert "Traceback" not in err and len(err.strip().splitlines()) <= 2
+
+
+@pytest.mark.parametrize("out, expected", [("/proc/foo", "cannot write there"),
+                                           ("a-file", "a file, not a folder")])
+def test_an_out_the_study_cannot_write_in_is_bad_input_before_any_case(capsys, tmp_path, out,
+                                                                        expected):
+    (tmp_path / "a-file").write_text("")
+    out = out if out.startswith("/") else str(tmp_path / out)
+    status = main(["study", str(study_file(tmp_path, COLUMN)), "--out", out])
+    err = capsys.readouterr().err
+    assert status == 2 and err.strip() == f"soilbin: error: --out {out}: {expected}" + (
+        " (No such file or directory)" if out == "/proc/foo" else "")
 
 
 def test_case_folders_are_named_after_their_own_values():

@@ -19,16 +19,24 @@ FRAMES_DIR = "fields"
 RUN_FOLDERS = (FRAMES_DIR, "checkpoint", "checkpoint.new", "checkpoint.old", "meshes")
 
 
-def prepare(path):
-    """Make ``path``, check that it takes files, and remove an older run's files."""
+def writable(path):
+    """Make the folder ``path`` and check that it takes files (InputError naming --out)."""
     path = Path(path)
     probe = path / ".soilbin-write-test"
+    if path.exists() and not path.is_dir():
+        raise InputError(f"--out {path}: a file, not a folder")
     try:
         path.mkdir(parents=True, exist_ok=True)
         probe.write_text("")
         probe.unlink()
     except OSError as err:
         raise InputError(f"--out {path}: cannot write there ({err.strerror or err})") from None
+    return path
+
+
+def prepare(path):
+    """Make ``path``, check that it takes files, and remove an older run's files."""
+    path = writable(path)
     for pattern in RUN_FILES:
         for name in path.glob(pattern):
             name.unlink(missing_ok=True)

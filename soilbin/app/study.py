@@ -31,6 +31,7 @@ from ..errors import InputError
 from ..params import Params, describe, from_table, param
 from ..records.toml_out import _scalar as toml_value
 from .cli import SCENES_DIR
+from .outdir import writable
 
 DONE = ("complete", "collapse")   # statuses of a case that reached its end
 #: Keys of every run summary (soilbin/app/run.py); a scene adds its headline keys.
@@ -317,6 +318,9 @@ def _figure(table, where, swept, summary_keys):
     table = dict(table)
     select = _dotted(table.pop("select", {}), f"{where}.select")
     figure = dataclasses.replace(from_table(Figure, table, where), select=tuple(select.items()))
+    if not re.fullmatch(r"[\w.-]+", figure.name) or set(figure.name) == {"."}:
+        raise InputError(f"{where}.name = {figure.name!r}: expected a file name in the study "
+                         "folder (letters, digits, '_', '-', '.'; no folders)")
     if figure.kind is FigureKind.CURVES:
         accepted = {"x": CURVE_COLUMNS, "y": CURVE_COLUMNS, "lines": ("",)}
     else:
@@ -679,6 +683,8 @@ def study_command(args):
     if args.jobs is not None:
         study = dataclasses.replace(study, run=dataclasses.replace(study.run, jobs=args.jobs))
     out = args.out or Path("runs") / study.name
+    if not args.dry_run:
+        writable(out)
     if args.dry_run:
         return _dry_run(study, out, args.retry_failed)
     try:
