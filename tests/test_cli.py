@@ -40,6 +40,22 @@ def test_bad_input_is_one_clear_line(capsys, args, expected):
         assert args[1] in err   # the message names the file
 
 
+POINT = ["point", "elastic", "oedometer", "--set", "E=1e4", "--set", "nu=0.3"]
+CALIBRATE = ["calibrate", str(SCENES.parent / "examples" / "calibration-vii5" / "vii5.toml")]
+
+
+@pytest.mark.parametrize("command", [POINT, CALIBRATE], ids=["point", "calibrate"])
+@pytest.mark.parametrize("out, expected", [("/proc/foo", "cannot write there (No such file"),
+                                           ("a-file", "a file, not a folder")])
+def test_an_out_folder_that_cannot_be_written_is_one_clear_line(capsys, tmp_path, command,
+                                                                 out, expected):
+    (tmp_path / "a-file").write_text("")
+    out = out if out.startswith("/") else str(tmp_path / out)
+    status, _, err = run_main(capsys, *command, "--out", out)
+    assert status == 2 and err.startswith(f"soilbin: error: --out {out}: {expected}")
+    assert len(err.strip().splitlines()) == 1
+
+
 def test_toml_syntax_and_unknown_key_name_file_and_line(capsys, tmp_path):
     broken = tmp_path / "broken.toml"
     broken.write_text((SCENES / "block-drucker-prager.toml").read_text() + "\n[loading\n")

@@ -316,6 +316,7 @@ def _point(args):
     from ..errors import InputError
     from ..launcher import mpi_world
     from ..material_point.driver import material_table, run_point, split_overrides
+    from .outdir import writable_on_rank0
 
     model_table, path_table = split_overrides(args.overrides)
     model, material, name = args.model, None, args.model
@@ -329,6 +330,7 @@ def _point(args):
         name = f"{Path(scene).stem}-{material_name}"
     out = args.out or Path("runs") / f"point-{name}-{args.path}"
     comm = mpi_world()   # under mpirun every rank drives the path, rank 0 writes and prints
+    writable_on_rank0(comm, out, keep=False)   # made once the path is driven
     summary = run_point(model, model_table, args.path, path_table,
                         out if comm is None or comm.rank == 0 else None, material)
     if _rank0():

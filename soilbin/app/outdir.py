@@ -19,18 +19,24 @@ FRAMES_DIR = "fields"
 RUN_FOLDERS = (FRAMES_DIR, "checkpoint", "checkpoint.new", "checkpoint.old", "meshes")
 
 
-def writable(path):
-    """Make the folder ``path`` and check that it takes files (InputError naming --out)."""
+def writable(path, keep=True):
+    """Check that the folder ``path`` takes files (InputError naming --out): made where
+    missing, and left made only if ``keep``."""
     path = Path(path)
     probe = path / ".soilbin-write-test"
     if path.exists() and not path.is_dir():
         raise InputError(f"--out {path}: a file, not a folder")
+    made = next((folder for folder in reversed((path, *path.parents)) if not folder.exists()),
+                None)
     try:
         path.mkdir(parents=True, exist_ok=True)
         probe.write_text("")
         probe.unlink()
     except OSError as err:
         raise InputError(f"--out {path}: cannot write there ({err.strerror or err})") from None
+    finally:
+        if made is not None and not keep:
+            shutil.rmtree(made, ignore_errors=True)
     return path
 
 
@@ -47,13 +53,24 @@ def prepare(path):
 
 def prepare_on_rank0(comm, path):
     """:func:`prepare` on rank 0; every rank raises its InputError (no rank is left waiting)."""
+    return _on_rank0(comm, prepare, path)
+
+
+def writable_on_rank0(comm, path, keep=True):
+    """:func:`writable` on rank 0 (``comm`` None: this process alone), every rank raising its
+    InputError."""
+    return _on_rank0(comm, lambda folder: writable(folder, keep), path)
+
+
+def _on_rank0(comm, check, path):
     error = None
-    if comm.rank == 0:
+    if comm is None or comm.rank == 0:
         try:
-            prepare(path)
+            check(path)
         except InputError as err:
             error = str(err)
-    error = comm.bcast(error, root=0)
+    if comm is not None:
+        error = comm.bcast(error, root=0)
     if error is not None:
         raise InputError(error)
     return Path(path)

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..app.outdir import writable_on_rank0
 from ..launcher import mpi_world
 from ..material_point.driver import CONVENTION
 from ..plotting import pyplot
@@ -132,8 +133,7 @@ def calibrate(file, out=None, jobs=1):
     out = Path(out or Path("runs") / f"calibrate-{calibration.file.stem}")
     comm = mpi_world()
     writer = comm is None or comm.rank == 0
-    if writer:
-        out.mkdir(parents=True, exist_ok=True)
+    writable_on_rank0(comm, out)
     result = fitting.fit(calibration, jobs)
     summary = summarize(calibration, result)
     summary["files"] = (["summary.json", "material.toml", "fit.csv"]
