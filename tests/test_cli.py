@@ -143,6 +143,8 @@ def test_a_run_that_cannot_finish_keeps_its_steps(tmp_path):
     ("mesh.nz=1e9", "mesh.nz: expected an integer, got 1000000000.0"),
     ("materials.soil.E=inf", "materials.soil.E = inf is outside the accepted range [1e-20, 1e+20]"),
     ("analysis.frame_rotation=[0, nan, 0]", "analysis.frame_rotation = (0.0, nan, 0.0): expected finite numbers"),
+    ("analysis.frame_rotation=[1e308, 0, 0]",
+     "analysis.frame_rotation = [1e+308, 0.0, 0.0]: expected components in [-360, 360] degrees"),
 ])
 def test_names_tables_and_numbers_out_of_bounds_are_one_clear_line(capsys, override, expected):
     status, _, err = run_main(capsys, "run", BLOCK, "--set", override)

@@ -228,14 +228,17 @@ class Analysis(Params):
     large_deformation: bool = param(False, doc="updated Lagrangian with an objective stress update "
                                                "(geometric stiffness, moving mesh)")
     frame_rotation: tuple[float, ...] = param(
-        (0.0, 0.0, 0.0), doc="rotation vector [degrees] turning the whole scene (mesh, supports, "
-                             "rollers, plane strain, loads, gravity): results along the loading "
-                             "direction must not change")
+        (0.0, 0.0, 0.0), doc="rotation vector [degrees, each in [-360, 360]] turning the whole "
+                             "scene (mesh, supports, rollers, plane strain, loads, gravity): "
+                             "results along the loading direction must not change")
 
     def __post_init__(self):
         super().__post_init__()
         if len(self.frame_rotation) != 3:
             raise InputError(f"frame_rotation = {list(self.frame_rotation)!r}: expected 3 numbers")
+        if any(abs(angle) > 360.0 for angle in self.frame_rotation):
+            raise InputError(f"frame_rotation = {list(self.frame_rotation)!r}: expected "
+                             "components in [-360, 360] degrees")
 
 
 #: The smallest residual tolerance: an assembled residual's rounding is about 1e-16 of its
