@@ -9,13 +9,16 @@ start of the run instead, and a problem builds its forms before it first updates
 models (:meth:`.quadrature.MaterialPoints.start`), so that the two overlap where one of them
 is outside Python (gcc, gmsh, LLVM): both threads' Python shares one interpreter lock
 (measured in docs/performance.md, *The first run and start-up*). Where the cache is warm
-the thread only loads the kernels from it.
+the thread only loads the kernels from it. Another process compiling into the cache instead
+would not share the lock, but on a two-core machine the main thread and gcc already take
+both cores: measured, the tine's first run on empty caches took as long or up to 3 s
+longer that way.
 
 The kernels are compiled by calling them as the run will: one update of one point of each
 region's model from its initial state with its tangent's symmetry check and its plastic
-work, one traction update of the tool's interface. numba's compiler lock makes a main thread that calls a kernel meanwhile wait for
-it rather than compile it twice. The assembler's loops (:mod:`.assembly`) compile on the
-main thread.
+work, one traction update of the tool's interface. numba's compiler lock makes a main
+thread that calls a kernel meanwhile wait for it rather than compile it twice. The
+assembler's loops (:mod:`.assembly`) compile on the main thread.
 """
 import contextlib
 import threading
