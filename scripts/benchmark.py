@@ -237,7 +237,7 @@ def main():
         known = {name for quick in (False, True) for name, _, _ in cases(quick)}
         fresh = {r["case"]: table_rows(r) for r in results}
         kept, again = page_rows(page, known)
-        rows = [fresh.pop(name, None) or row for name, row in kept.items()] + list(fresh.values())
+        rows = [fresh.pop(name, None) or old for name, old in kept.items()] + list(fresh.values())
         # a whole run's table with some of its rows measured again
         text = markdown(rows, "OMP_NUM_THREADS=1 python scripts/benchmark.py",
                         again=(again + ", then " if again else "") + f"`{command}`")

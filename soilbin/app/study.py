@@ -683,10 +683,9 @@ def study_command(args):
     if args.jobs is not None:
         study = dataclasses.replace(study, run=dataclasses.replace(study.run, jobs=args.jobs))
     out = args.out or Path("runs") / study.name
-    if not args.dry_run:
-        writable(out)
     if args.dry_run:
         return _dry_run(study, out, args.retry_failed)
+    writable(out)
     try:
         outcomes = run_study(study, out, args.retry_failed)
     except Interrupted as stop:
