@@ -105,8 +105,10 @@ MAX_LENGTH = 1.0e6
 #: largest extent. gmsh's mesher fails near its geometric tolerance (Geometry.Tolerance,
 #: 1e-8): in the 12 in soil of scenes/container-footing.toml an edge_size of 1e-8 leaves
 #: triangles and 1e-9 aborts gmsh, and 8e-9 of the extent leaves triangles in a soil scaled
-#: to 12e-6 in; 1e-6 keeps two decades from there (a mesh graded over more has no use).
-MIN_PROPORTION = 1.0e-6
+#: to 12e-6 in. And the builders find their faces within 1e-6 of the extent
+#: (:func:`.blocks.entities_within`): at that length two faces are one (a 1e6 x 1 x 1 block
+#: lost its loaded face). 1e-5 keeps a decade from there (a mesh graded over more has no use).
+MIN_PROPORTION = 1.0e-5
 
 
 def length_param(default, doc):
