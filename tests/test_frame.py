@@ -87,6 +87,16 @@ def test_rollers_and_gravity_in_a_rotated_frame(tmp_path, large):
     assert a[0].force > 0.0
 
 
+@pytest.mark.parametrize("rotation", [ROTATION, [0.0, 47.0, 0.0]])
+def test_a_pressure_in_large_deformation_in_a_rotated_frame(rotation):
+    """The large-deformation column under its pressure, turned: the same settlement. (With
+    the traction's direction as UFL literals FFCx 0.5 could not compile its form where the
+    turned direction has a zero component: the second rotation.)"""
+    settlements = [solved("column-elastic-large", turn, "loading.steps=2")[1][-1].displacement
+                   for turn in ([0.0, 0.0, 0.0], rotation)]
+    assert settlements[1] == pytest.approx(settlements[0], rel=1e-10)
+
+
 def test_plane_strain_footing_in_a_rotated_frame():
     """The strip footing on its slab (rollers, plane strain, hex8-bbar) turned: the same first
     steps."""

@@ -83,8 +83,12 @@ def tributary_areas(disc, tagged, groups, component):
 
 
 def traction(disc, kinematics, magnitude, vector, measure, v):
-    """External virtual work of a traction of fixed direction, per unit deformed area."""
-    return (magnitude * ufl.dot(ufl.as_vector(vector), disc.displacement(v))
+    """External virtual work of a traction of fixed direction, per unit deformed area. In a
+    rotated frame the direction is a Constant: as UFL literals with a zero component, FFCx
+    0.5 fails to generate the large-deformation Jacobian (tests/test_frame.py)."""
+    direction = (ufl.as_vector(vector) if disc.basis is None else
+                 fem.Constant(disc.mesh, PETSc.ScalarType(np.asarray(vector))))
+    return (magnitude * ufl.dot(direction, disc.displacement(v))
             * kinematics.area_stretch() * measure)
 
 
