@@ -116,3 +116,18 @@ def test_axes_words_of_curve_columns_summary_keys_and_swept_keys():
     load = load_scene(ROOT / "scenes" / "strip-load-von-mises.toml")
     assert summary_label("collapse_pressure", load) == "collapse pressure [psi]"
     assert key_label("loading.magnitude", load) == "pressure [psi]"
+
+
+def test_a_tool_section_that_meets_no_tool_face_says_so_and_draws_nothing(tmp_path):
+    """A tool given by a horizontal face of the bin (its base): the section at half its depth
+    holds no tool point; the figure is not drawn, and the run is told why (it crashed)."""
+    from conftest import make_problem
+    from test_soil_bin import COARSE
+    from soilbin.app.figures import tool_section_png
+    problem = make_problem("tine-2in-90deg", *COARSE, 'tool.faces=["base"]')
+    why = tool_section_png(problem, tmp_path / "tool-section.png")
+    assert why.startswith("no face of the tool crosses the section at z = -6 in")
+    assert not (tmp_path / "tool-section.png").exists()
+    drawn = make_problem("tine-2in-90deg", *COARSE)
+    assert tool_section_png(drawn, tmp_path / "tool-section.png") is None
+    assert (tmp_path / "tool-section.png").exists()

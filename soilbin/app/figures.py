@@ -64,7 +64,7 @@ def _number(value):
 def tool_section_png(problem, path, depth_fraction=0.5):
     """Horizontal section through the tool at a fraction of its depth, on the initial
     geometry: soil displacement vectors (x-y) and the gap between soil and tool (rank 0
-    draws; data gathered)."""
+    draws; data gathered). Returns why it is not drawn (rank 0), else None."""
     x, displacement = problem.nodal_displacement()
     points, gap = problem.tool.gap()
     comm = problem.comm
@@ -79,6 +79,9 @@ def tool_section_png(problem, path, depth_fraction=0.5):
         return
     xs, us, ps, gaps = (np.concatenate(parts) for parts in zip(*data))
     length = problem.scene.unit_system.length
+    if not len(ps):
+        return (f"no face of the tool crosses the section at z = {z_section:.3g} {length} "
+                "(half the depth of its lowest point)")
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     scale = np.abs(us[:, :2]).max()

@@ -242,7 +242,9 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
     if records and comm.rank == 0:
         figures.curve_png(records, scene, out_dir / "curve.png", estimates)
     if interrupted is None and records and sections:
-        figures.tool_section_png(problem, out_dir / "tool-section.png")
+        failure = figures.tool_section_png(problem, out_dir / "tool-section.png")
+        if failure:
+            print(f"soilbin: warning: tool-section.png not drawn: {failure}", file=sys.stderr)
     picture = folder.fields.picture() if folder.fields is not None and comm.rank == 0 else None
     if interrupted is None and records and picture is not None:
         failure = figures_3d.draw_in_subprocess(*picture, scene.unit_system.length,
