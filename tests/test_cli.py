@@ -40,6 +40,22 @@ def test_bad_input_is_one_clear_line(capsys, args, expected):
         assert args[1] in err   # the message names the file
 
 
+@pytest.mark.parametrize("args, expected", [
+    (["run"], "soilbin run: error: the following arguments are required: scene"),
+    (["study", "x.toml", "--jobs", "x"], "soilbin study: error: argument --jobs: invalid int"),
+    (["run", "column-elastic", "--out", ""],
+     "soilbin run: error: argument --out: expected a folder, got an empty name"),
+    (["run", "column-elastic", "--resume", " "], "soilbin run: error: argument --resume: expected"),
+    (["run", "column-elastic", "--bogus"], "soilbin: error: unrecognized arguments: --bogus"),
+])
+def test_command_line_errors_are_one_line(capsys, args, expected):
+    with pytest.raises(SystemExit) as stop:
+        main(args)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.startswith(expected)
+    assert len(err.strip().splitlines()) == 1 and "--help)" in err
+
+
 POINT = ["point", "elastic", "oedometer", "--set", "E=1e4", "--set", "nu=0.3"]
 CALIBRATE = ["calibrate", str(SCENES.parent / "examples" / "calibration-vii5" / "vii5.toml")]
 

@@ -35,10 +35,24 @@ SIGTERM (summary.json has status "interrupted"; converged steps are on disk).
 """
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors on one line (``--help`` shows the usage)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def folder(text):
+    """An --out or --resume folder: a non-empty name."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder, got an empty name")
+    return Path(text)
+
+
 def _parser(point_details=True):
     """The command line's parser; without ``point_details`` the ``point`` command's own
     help (its paths and their parameters) is left out, and NumPy is not loaded for it."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="soilbin", description="Geometric and material nonlinear finite element analysis "
         "of soil-structure interaction (DOLFINx).",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -55,14 +69,14 @@ def _parser(point_details=True):
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene value, e.g. materials.soil.E=5000 (repeatable); "
                           "checked like the file")
-    run.add_argument("--out", type=Path, help="run folder (default: runs/<scene name>)")
+    run.add_argument("--out", type=folder, help="run folder (default: runs/<scene name>)")
     run.add_argument("--json", action="store_true",
                      help="no progress lines; the last stdout line is the summary as one JSON object")
     run.add_argument("-v", "--verbose", action="store_true",
                      help="also a progress line per Newton iteration (its residual, the "
                           "target, the seconds since the last line and the peak resident "
                           "memory of all ranks): for long runs")
-    run.add_argument("--resume", type=Path, metavar="FOLDER",
+    run.add_argument("--resume", type=folder, metavar="FOLDER",
                      help="go on from the last converged step of the stopped run in FOLDER (its "
                           "checkpoint/; the same scene but for [solver], [output] and "
                           "[headline], any number of ranks); the new --out starts with its steps")
@@ -152,7 +166,7 @@ def _calibrate_parser(sub):
         "(trust-region reflective, within the bounds) from the start values.",
         epilog=CALIBRATE_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     calibrate.add_argument("file", metavar="FILE.toml", type=Path, help="the calibration file")
-    calibrate.add_argument("--out", type=Path, help="output folder (default: runs/calibrate-STEM)")
+    calibrate.add_argument("--out", type=folder, help="output folder (default: runs/calibrate-STEM)")
     calibrate.add_argument("--jobs", type=int, default=os.cpu_count() or 1, metavar="N",
                            help="processes for the fit's finite differences (default: the "
                                 "machine's cores, %(default)s here; under mpirun the ranks)")
@@ -206,7 +220,7 @@ def _point_parser(sub, details=True):
                        help="a model parameter (E=4000, matching=compression_cone; overrides "
                             "a scene material's) or a path parameter (path.confining=10); "
                             "repeatable, checked on input")
-    point.add_argument("--out", type=Path, help="output folder (default: runs/point-MODEL-PATH)")
+    point.add_argument("--out", type=folder, help="output folder (default: runs/point-MODEL-PATH)")
     point.add_argument("--json", action="store_true",
                        help="the last stdout line is the summary as one JSON object")
 

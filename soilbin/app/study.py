@@ -30,7 +30,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..params import Params, describe, from_table, param
 from ..records.toml_out import _scalar as toml_value
-from .cli import SCENES_DIR
+from .cli import SCENES_DIR, folder
 from .outdir import writable
 
 DONE = ("complete", "collapse")   # statuses of a case that reached its end
@@ -659,7 +659,7 @@ def add_parser(sub):
                                    figures=_described(Figure)),
         formatter_class=argparse.RawDescriptionHelpFormatter)
     study.add_argument("file", type=Path, metavar="FILE", help="the study file (TOML)")
-    study.add_argument("--out", type=Path, help="study folder (default: runs/<study file name>)")
+    study.add_argument("--out", type=folder, help="study folder (default: runs/<study file name>)")
     study.add_argument("--jobs", type=int, help="cases at a time (default: run.jobs of the file)")
     study.add_argument("--retry-failed", action="store_true",
                        help="run again the cases whose earlier run failed")
