@@ -200,6 +200,12 @@ def bad_input_cases():
     ]
 
 
+def test_a_missing_calibration_file_is_named_as_one(capsys, tmp_path):
+    status = main(["calibrate", str(tmp_path / "no.toml")])
+    assert status == 2
+    assert capsys.readouterr().err.strip() == f"soilbin: error: {tmp_path / 'no.toml'}: no such calibration file"
+
+
 @pytest.mark.parametrize("name, edit, words", bad_input_cases(), ids=[c[0] for c in bad_input_cases()])
 def test_bad_input_is_refused_before_fitting(tmp_path, capsys, name, edit, words):
     path = dp_file(tmp_path)

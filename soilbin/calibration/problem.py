@@ -85,7 +85,7 @@ def read_calibration(path):
     """The checked :class:`Calibration` of ``path``; every problem is an InputError naming
     the file, the test, the column or row and what is accepted."""
     path = Path(path)
-    doc = read_toml(path)
+    doc = read_toml(path, "calibration")
     where = str(path)
     _known_keys(doc, TOP_KEYS, where)
     model_name = doc.get("model")

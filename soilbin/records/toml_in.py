@@ -23,15 +23,17 @@ def scene_path(arg):
     return SCENES_DIR / f"{arg}.toml"
 
 
-def read_toml(path):
-    """The tables of a TOML file; a missing file, bad UTF-8 or bad TOML is an InputError."""
+def read_toml(path, kind="scene"):
+    """The tables of a TOML file (a ``kind`` file, for the messages); a missing file, bad
+    UTF-8 or bad TOML is an InputError."""
     path = Path(path)
     if not path.is_file():
-        raise InputError(f"{path}: no such scene file")
+        raise InputError(f"{path}: no such {kind} file")
     try:
         return tomllib.loads(path.read_bytes().decode("utf-8"))
     except UnicodeDecodeError as err:
-        raise InputError(f"{path}: not UTF-8 text (byte {err.start}); save the scene as UTF-8") from None
+        raise InputError(f"{path}: not UTF-8 text (byte {err.start}); save the {kind} as "
+                         "UTF-8") from None
     except tomllib.TOMLDecodeError as err:
         raise InputError(f"{path}: TOML syntax error: {err}") from None
 
