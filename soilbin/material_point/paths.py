@@ -25,6 +25,8 @@ from ..tensors import SQRT2
 STRAIN, STRESS = "e", "s"
 #: A stress-controlled component whose value is held at its start-of-leg value.
 HOLD = math.nan
+#: Largest strain a path prescribes: the driver's strains are small strains.
+MAX_STRAIN = 1.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -167,7 +169,7 @@ class Triaxial(ConfinedPathParams):
     constant lateral stress; optional unloading of the axial stress back to the
     confining pressure."""
 
-    axial_strain: float = param(0.05, lo=0.0, lo_open=True,
+    axial_strain: float = param(0.05, lo=0.0, lo_open=True, hi=MAX_STRAIN,
                                 doc="axial strain of the shearing leg (magnitude; "
                                     "shortening in compression, lengthening in extension)")
     unload: bool = param(False, doc="after shearing, unload the axial stress to the "
@@ -204,7 +206,8 @@ class UndrainedTriaxial(ConfinedPathParams):
     the strain is prescribed fully (eps_x = eps_y = -eps_z / 2); the output stresses
     are effective stresses."""
 
-    axial_strain: float = param(0.05, doc="axial strain of the shearing leg (compression "
+    axial_strain: float = param(0.05, lo=-MAX_STRAIN, hi=MAX_STRAIN,
+                                doc="axial strain of the shearing leg (compression "
                                           "positive; negative for undrained extension)")
 
     def __post_init__(self):
@@ -225,7 +228,8 @@ class SimpleShear(ConfinedPathParams):
     height held (normal = strain, constant volume); optional unloading of the
     shear stress to zero."""
 
-    shear_strain: float = param(0.05, doc="engineering shear strain gamma_xz of the shearing leg")
+    shear_strain: float = param(0.05, lo=-MAX_STRAIN, hi=MAX_STRAIN,
+                                doc="engineering shear strain gamma_xz of the shearing leg")
     normal: Control = param(Control.STRESS, doc="normal (z) direction: constant normal stress "
                                                 "(stress) or constant height (strain)")
     unload: bool = param(False, doc="after shearing, unload the shear stress to zero")
@@ -251,7 +255,7 @@ class Oedometer(PathParams):
 
     control: Control = param(Control.STRAIN, doc="loading by axial strain (axial_strain) or "
                                                  "by axial stress (axial_stress)")
-    axial_strain: float = param(0.05, lo=0.0, lo_open=True,
+    axial_strain: float = param(0.05, lo=0.0, lo_open=True, hi=MAX_STRAIN,
                                 doc="axial strain of the loading leg (compression positive)")
     axial_stress: float = _nan_default("axial stress at the end of loading (compression "
                                        "positive); required with control = stress")
