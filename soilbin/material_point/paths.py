@@ -208,7 +208,7 @@ class UndrainedTriaxial(ConfinedPathParams):
 
     axial_strain: float = param(0.05, lo=-MAX_STRAIN, hi=MAX_STRAIN,
                                 doc="axial strain of the shearing leg (compression "
-                                          "positive; negative for undrained extension)")
+                                    "positive; negative for undrained extension)")
 
     def __post_init__(self):
         super().__post_init__()
