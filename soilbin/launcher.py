@@ -12,3 +12,9 @@ def mpi_world():
         return None
     from mpi4py import MPI
     return MPI.COMM_WORLD
+
+
+def launched_rank():
+    """This process's rank as the MPI launcher numbered it (0 without one), read before MPI
+    starts."""
+    return int(os.environ.get("OMPI_COMM_WORLD_RANK") or os.environ.get("PMI_RANK") or 0)

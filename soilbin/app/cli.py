@@ -13,6 +13,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from ..errors import InputError, SoilbinError
+from ..launcher import launched_rank
 from ..records.toml_in import SCENES_DIR, read_scene_tables, scene_path
 from . import interrupt
 
@@ -36,10 +37,12 @@ SIGTERM (summary.json has status "interrupted"; converged steps are on disk).
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with its errors on one line (``--help`` shows the usage)."""
+    """argparse with its errors on one line (``--help`` shows the usage), printed by the
+    first rank alone under mpirun."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n"
+                  if launched_rank() == 0 else None)
 
 
 def folder(text):
