@@ -207,6 +207,9 @@ def test_failure_keeps_the_converged_steps(capsys, tmp_path):
      "path.axial_strain = 1e+300 is outside the accepted range [-1, 1]"),
     (["drucker_prager", "simple-shear", "--set", "path.shear_strain=-2"],
      "path.shear_strain = -2.0 is outside the accepted range [-1, 1]"),
+    (["drucker_prager", "hydrostatic", "--set", "path.control=strain",
+      "--set", "path.volumetric_strain=1e300"],
+     "path.volumetric_strain = 1e+300 is outside the accepted range [-1, 1]"),
 ])
 def test_bad_input_is_one_line_and_exit_2(capsys, tmp_path, args, expected):
     model_sets = sets(DP) if args[0] == "drucker_prager" else []   # later --set wins

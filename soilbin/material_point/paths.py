@@ -140,8 +140,8 @@ class Hydrostatic(PathParams):
     pressure: float = _nan_default("mean stress at the end of loading (compression "
                                    "positive); required with control = stress")
     volumetric_strain: float = _nan_default("volumetric strain of the loading leg "
-                                            "(compression positive); required with "
-                                            "control = strain")
+                                            "(compression positive, within [-1, 1]); "
+                                            "required with control = strain")
     unload: bool = param(True, doc="unload after loading")
     unload_to: float = _nan_default("mean stress at the end of unloading; nan (the "
                                     "default): p_initial")
@@ -150,6 +150,9 @@ class Hydrostatic(PathParams):
         super().__post_init__()
         needed = "pressure" if self.control is Control.STRESS else "volumetric_strain"
         _require_finite(self, needed, f"required with control = {self.control.value!r}")
+        if self.control is Control.STRAIN and abs(self.volumetric_strain) > MAX_STRAIN:
+            raise InputError(f"volumetric_strain = {self.volumetric_strain!r} is outside the "
+                             f"accepted range [{-MAX_STRAIN:g}, {MAX_STRAIN:g}]")
         _resolve(self, "unload_to", self.p_initial)
 
     def legs(self):
