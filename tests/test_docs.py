@@ -2,7 +2,6 @@
 default of `make run` is the Makefile's, and the performance page's benchmark block is what
 the benchmark writes from its rows."""
 import re
-import sys
 
 from soilbin.meshes import BUILDERS
 from soilbin.models import MODELS
@@ -38,11 +37,11 @@ def test_the_builder_list_is_the_catalogue():
     assert section_names("### Mesh builders", r"^- `(\w+)`:") == list(BUILDERS)
 
 
-def test_the_benchmark_block_is_rebuilt_from_its_own_rows():
+def test_the_benchmark_block_is_rebuilt_from_its_own_rows(monkeypatch):
     """`scripts/benchmark.py --update` keeps the page's rows of the cases it does not run: the
     block read back and written again from them is the block, every row a case's, and a
     measured case's row is the one written from its results."""
-    sys.path.insert(0, str(ROOT / "scripts"))
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
     import benchmark
     page = ROOT / "docs" / "performance.md"
     block = page.read_text().split("<!-- benchmark:start -->\n")[1].split("<!-- benchmark:end -->")[0]
