@@ -68,6 +68,15 @@ def at(rows, column, displacement, slack=1e-9):
     return float(np.interp(displacement, reached, [r[column] for r in rows]))
 
 
+def travel_at(rows, load):
+    """The travel at this draft (force control), interpolated along the curve; None past
+    its end."""
+    forces = [r["force"] for r in rows]
+    if not forces or forces[-1] < load * (1.0 - 1e-9):
+        return None
+    return float(np.interp(load, forces, [r["displacement"] for r in rows]))
+
+
 def remeshes(folder):
     """The rows of a run's remeshes.csv, as numbers (none if it never remeshed)."""
     try:

@@ -9,35 +9,21 @@ of the cells whose equivalent plastic strain passed DISTURBED and the largest ri
 ground surface (both for the whole tool: an embedded half counted twice). In this
 normally consolidated soil every cell the tool compresses reaches its cap, so "yielded"
 alone would be most of the bin. Copies the study's tool-shapes.png into
-docs/figures (--figures DIR). Between the tine-cad-blade markers of docs/chapter8.md (beside
---page) it compares the flat blade's travel at those drafts with the built-in hexahedral
-blade's, `soilbin run tine-2in-108lb` (`make run`; run into runs/tine-2in-108lb if that
-folder has no curve). Loads in lb, lengths in in.
+docs/figures (--figures DIR). Loads in lb, lengths in in.
 """
-import csv
 import shutil
-import subprocess
 
 import meshio
 import numpy as np
 
 from soilbin.app.study import Outcome, draw_figures, load_study
 from doc_tables import ROOT, write_between_markers
-from study_tables import SOILBIN, arguments, finished, run_study
+from study_tables import arguments, finished, run_study, travel_at
 
 STUDY = ROOT / "studies" / "tool-shapes.toml"
-HEX_BLADE = ROOT / "runs" / "tine-2in-108lb"
 LOADS = (36.0, 72.0, 108.0)
 #: The equivalent plastic strain above which a cell counts as disturbed.
 DISTURBED = 0.01
-
-
-def travel_at(rows, load):
-    """The travel at this draft, interpolated along the curve; None past its end."""
-    forces = [r["force"] for r in rows]
-    if not forces or forces[-1] < load * (1.0 - 1e-9):
-        return None
-    return float(np.interp(load, forces, [r["displacement"] for r in rows]))
 
 
 def disturbance(folder, share):
@@ -77,23 +63,6 @@ def table(results, folder):
     return "\n".join(lines)
 
 
-def blade_table(results):
-    """The flat blade's travel at each load against the built-in hexahedral blade's."""
-    if not (HEX_BLADE / "summary.json").is_file():
-        subprocess.run([SOILBIN, "run", "tine-2in-108lb", "--out", HEX_BLADE], cwd=ROOT, check=True)
-    with open(HEX_BLADE / "curve.csv") as f:
-        hexahedral = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-    case, summary, rows = results[0]
-    lines = [f"| draft [lb] | travel, `tine-2in-108lb` (soil_bin, hex8-bbar) [in] | travel, "
-             f"{case.label} from STEP (tet10-bbar) [in] | difference |",
-             "| --- | --- | --- | --- |"]
-    for load in LOADS:
-        ours, theirs = travel_at(rows, load), travel_at(hexahedral, load)
-        difference = ("–" if None in (ours, theirs) else f"{100 * (ours / theirs - 1):+.1f}%")
-        lines.append(f"| {load:g} | {shown(theirs, '.4g')} | {shown(ours, '.4g')} | {difference} |")
-    return "\n".join(lines) + "\n"
-
-
 def main():
     args = arguments(__doc__, "tool-shapes", "user-guide.md")
     run_study(STUDY, args)
@@ -107,7 +76,6 @@ def main():
                          for case, summary, _ in results], args.out)
     shutil.copy(args.out / "tool-shapes.png", args.figures / "tool-shapes.png")
     write_between_markers(args.page, "tool-shapes", text)
-    write_between_markers(args.page.parent / "chapter8.md", "tine-cad-blade", blade_table(results))
 
 
 if __name__ == "__main__":
