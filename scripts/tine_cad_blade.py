@@ -15,25 +15,17 @@ import csv
 import json
 import subprocess
 
-import numpy as np
-
 from soilbin.app.study import load_study
 from soilbin.records.scene import load_scene
 from doc_tables import ROOT, write_between_markers
-from study_tables import SOILBIN, arguments, finished, run_study, travel_at
+from study_tables import SOILBIN, arguments, at, finished, run_study, travel_at
 
-STUDIES = ("tine-cad-blade", "tine-blade-hex27")
+#: Each study with the blade and element of its cases; the finest case of the last one, the
+#: quadratic bricks, is the reference of the drafts at equal travel.
+STUDIES = {"tine-cad-blade": "from STEP, `tet10-bbar`", "tine-blade-hex27": "built in, `hex27-bbar`"}
 TRILINEAR = "tine-2in-108lb"
 LOADS = (36.0, 72.0, 108.0)
 SIZE = "mesh.element_size"
-
-
-def draft_at(rows, travel):
-    """The draft at this travel, interpolated along the curve; None past its end."""
-    reached = [r["displacement"] for r in rows]
-    if travel is None or not reached or reached[-1] < travel:
-        return None
-    return float(np.interp(travel, reached, [r["force"] for r in rows]))
 
 
 def shown(value, form=".4g"):
@@ -52,10 +44,10 @@ def trilinear(folder):
 
 
 def cases(args):
-    """(blade and element, element size, summary, rows) of every finished case: the
-    trilinear bricks, the quadratic bricks and the tetrahedra, coarse to fine."""
+    """(blade and element, element size, summary, rows) of every finished case, the
+    trilinear bricks first, then each study's coarse to fine."""
     found = [trilinear(args.out / TRILINEAR)]
-    for name, label in zip(STUDIES, ("from STEP, `tet10-bbar`", "built in, `hex27-bbar`")):
+    for name, label in STUDIES.items():
         study = load_study(ROOT / "studies" / f"{name}.toml")
         done = [(label, case.values[SIZE], summary, rows)
                 for case, summary, rows in finished(study, args.out / name)]
@@ -72,10 +64,9 @@ def tables(found):
         lines.append(f"| {label} | {size:g} | {summary['n_cells']} | {summary['n_dofs']} | "
                      f"{summary['newton_iterations']} ({summary['n_steps']}) | "
                      f"{summary['cpu_s']:.0f} | {travels} |")
-    quadratic = [c for c in found if "hex27" in c[0]]
-    if not quadratic:
+    if found[-1][0] != STUDIES["tine-blade-hex27"]:   # no quadratic brick finished yet
         return "\n".join(lines) + "\n"
-    reference = quadratic[-1][3]
+    reference = found[-1][3]
     travels = [travel_at(reference, load) for load in LOADS]
     lines += ["", f"| blade, element | element size at the blade [in] | "
               + " | ".join(f"draft at {shown(t)} in [lb], against {load:g} lb"
@@ -85,7 +76,7 @@ def tables(found):
         if rows is reference:
             cells = [f"{load:g} (the reference)" for load in LOADS]
         else:
-            drafts = [draft_at(rows, t) for t in travels]
+            drafts = [None if t is None else at(rows, "force", t) for t in travels]
             cells = ["–" if d is None else f"{d:.1f} ({100 * (d / load - 1):+.1f}%)"
                      for d, load in zip(drafts, LOADS)]
         lines.append(f"| {label} | {size:g} | " + " | ".join(cells) + " |")
