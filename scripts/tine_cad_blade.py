@@ -22,7 +22,8 @@ from study_tables import SOILBIN, arguments, at, finished, run_study, travel_at
 
 #: Each study with the blade and element of its cases; the finest case of the last one, the
 #: quadratic bricks, is the reference of the drafts at equal travel.
-STUDIES = {"tine-cad-blade": "from STEP, `tet10-bbar`", "tine-blade-hex27": "built in, `hex27-bbar`"}
+STUDIES = {"tine-cad-blade": "from STEP, `tet10-bbar`",
+           "tine-blade-hex27": "built in, `hex27-bbar`"}
 TRILINEAR = "tine-2in-108lb"
 LOADS = (36.0, 72.0, 108.0)
 SIZE = "mesh.element_size"
