@@ -26,7 +26,7 @@ STUDIES = {"tine-cad-blade": "from STEP, `tet10-bbar`",
            "tine-blade-hex27": "built in, `hex27-bbar`"}
 TRILINEAR = "tine-2in-108lb"
 LOADS = (36.0, 72.0, 108.0)
-SIZE = "mesh.element_size"
+SIZE, GROWTH = "mesh.element_size", "mesh.growth"
 
 
 def shown(value, form=".4g"):
@@ -34,53 +34,60 @@ def shown(value, form=".4g"):
 
 
 def trilinear(folder):
-    """(blade and element, element size, summary, rows) of `make run`'s scene (hex8-bbar),
-    run into ``folder`` if it holds no finished run."""
+    """(blade and element, (element size, growth), summary, rows) of `make run`'s scene
+    (hex8-bbar), run into ``folder`` if it holds no finished run."""
     if not (folder / "summary.json").is_file():
         subprocess.run([SOILBIN, "run", TRILINEAR, "--out", folder], cwd=ROOT, check=True)
     with open(folder / "curve.csv") as f:
         rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-    size = load_scene(ROOT / "scenes" / f"{TRILINEAR}.toml").mesh.element_size
-    return "built in, `hex8-bbar`", size, json.loads((folder / "summary.json").read_text()), rows
+    mesh = load_scene(ROOT / "scenes" / f"{TRILINEAR}.toml").mesh
+    return ("built in, `hex8-bbar`", (mesh.element_size, mesh.growth),
+            json.loads((folder / "summary.json").read_text()), rows)
 
 
 def cases(args):
-    """(blade and element, element size, summary, rows) of every finished case, the
-    trilinear bricks first, then each study's coarse to fine."""
+    """(blade and element, (element size, growth), summary, rows) of every finished case,
+    the trilinear bricks first, then each study's coarse to fine."""
     found = [trilinear(args.out / TRILINEAR)]
     for name, label in STUDIES.items():
         study = load_study(ROOT / "studies" / f"{name}.toml")
-        done = [(label, case.values[SIZE], summary, rows)
+        own = load_scene(study.scene_path).mesh
+        done = [(label, (case.values[SIZE], case.values.get(GROWTH, own.growth)), summary, rows)
                 for case, summary, rows in finished(study, args.out / name)]
-        found += sorted(done, key=lambda c: -c[1])
+        found += sorted(done, key=lambda c: (-c[1][0], -c[1][1]))
     return found
 
 
+def mesh_name(mesh):
+    size, growth = mesh
+    return f"{size:g} / {growth:g}"
+
+
 def tables(found):
-    lines = ["| blade, element | element size at the blade [in] | cells | unknowns | "
+    lines = ["| blade, element | element size at the blade [in] / growth | cells | unknowns | "
              "Newton (steps) | CPU [s] | travel at 36 / 72 / 108 lb [in] |",
              "| --- | --- | --- | --- | --- | --- | --- |"]
-    for label, size, summary, rows in found:
+    for label, mesh, summary, rows in found:
         travels = " / ".join(shown(travel_at(rows, load)) for load in LOADS)
-        lines.append(f"| {label} | {size:g} | {summary['n_cells']} | {summary['n_dofs']} | "
+        lines.append(f"| {label} | {mesh_name(mesh)} | {summary['n_cells']} | {summary['n_dofs']} | "
                      f"{summary['newton_iterations']} ({summary['n_steps']}) | "
                      f"{summary['cpu_s']:.0f} | {travels} |")
     if found[-1][0] != STUDIES["tine-blade-hex27"]:   # no quadratic brick finished yet
         return "\n".join(lines) + "\n"
     reference = found[-1][3]
     travels = [travel_at(reference, load) for load in LOADS]
-    lines += ["", f"| blade, element | element size at the blade [in] | "
+    lines += ["", f"| blade, element | element size at the blade [in] / growth | "
               + " | ".join(f"draft at {shown(t)} in [lb], against {load:g} lb"
                            for t, load in zip(travels, LOADS)) + " |",
               "| --- | --- | --- | --- | --- |"]
-    for label, size, _, rows in found:
+    for label, mesh, _, rows in found:
         if rows is reference:
             cells = [f"{load:g} (the reference)" for load in LOADS]
         else:
             drafts = [None if t is None else at(rows, "force", t) for t in travels]
             cells = ["–" if d is None else f"{d:.1f} ({100 * (d / load - 1):+.1f}%)"
                      for d, load in zip(drafts, LOADS)]
-        lines.append(f"| {label} | {size:g} | " + " | ".join(cells) + " |")
+        lines.append(f"| {label} | {mesh_name(mesh)} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
