@@ -1,7 +1,7 @@
 """The blade from a STEP file on tetrahedra against the built-in blade on bricks, both
-under force control to 108 lb: studies/tine-cad-blade.toml (tet10-bbar, four element
-sizes) and studies/tine-blade-hex27.toml (hex27-bbar, two), beside `make run`'s
-trilinear bricks; the tine-cad-blade tables of docs/chapter8.md.
+under force control to 108 lb: studies/tine-cad-blade.toml (tet10-bbar, six meshes) and
+studies/tine-blade-hex27.toml (hex27-bbar, two), beside `make run`'s trilinear bricks; the
+tine-cad-blade tables of docs/chapter8.md.
 
 Runs both studies (resumable; --out DIR holds them and `make run`'s scene, run there if
 it has no curve), then writes between the tine-cad-blade markers of docs/chapter8.md
@@ -69,9 +69,9 @@ def tables(found):
              "| --- | --- | --- | --- | --- | --- | --- |"]
     for label, mesh, summary, rows in found:
         travels = " / ".join(shown(travel_at(rows, load)) for load in LOADS)
-        lines.append(f"| {label} | {mesh_name(mesh)} | {summary['n_cells']} | {summary['n_dofs']} | "
-                     f"{summary['newton_iterations']} ({summary['n_steps']}) | "
-                     f"{summary['cpu_s']:.0f} | {travels} |")
+        lines.append(f"| {label} | {mesh_name(mesh)} | {summary['n_cells']} | "
+                     f"{summary['n_dofs']} | {summary['newton_iterations']} "
+                     f"({summary['n_steps']}) | {summary['cpu_s']:.0f} | {travels} |")
     if found[-1][0] != STUDIES["tine-blade-hex27"]:   # no quadratic brick finished yet
         return "\n".join(lines) + "\n"
     reference = found[-1][3]
