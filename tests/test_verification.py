@@ -17,6 +17,22 @@ def test_column_settles_pL_over_M(solve, E, nu, p):
     assert summary["top_settlement"] == pytest.approx(column_settlement(p, L, E, nu), rel=1e-8)
 
 
+@pytest.mark.parametrize("control, magnitude", [("force", 100.0), ("displacement", 0.1)])
+def test_a_first_step_cut_to_2_to_the_minus_30_still_settles_pL_over_M(solve, control, magnitude):
+    """The first step at 2^-30 of the load sets Newton's force scale; the rounding of the
+    larger loads after it must not pass the residual floor (each step then stagnated from
+    about 1e-5 of the load on, the 16th step, until the smallest increment failed)."""
+    summary, out = solve("column-elastic", f"loading.control={control}",
+                         f"loading.magnitude={magnitude}", "loading.first_cuts=30",
+                         "loading.max_cuts=30")
+    assert summary["status"] == "complete"
+    with open(out / "curve.csv") as f:
+        assert sum(1 for _ in csv.DictReader(f)) > 30
+    exact = magnitude if control == "displacement" else column_settlement(magnitude, 10.0, 9000.0,
+                                                                          0.2)
+    assert summary["top_settlement"] == pytest.approx(exact, rel=1e-8)
+
+
 @pytest.mark.parametrize("c, phi", [(500.0, 30.0), (100.0, 10.0), (20.0, 45.0)])
 def test_block_collapses_at_mohr_coulomb_uniaxial_strength(solve, c, phi):
     """VII.2, eq. 7.7: the compression cone gives 2c cos(phi)/(1 - sin(phi)) (1732 psf)."""

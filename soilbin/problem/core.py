@@ -176,8 +176,11 @@ class SoilProblem:
     def observe(self):
         """Displacement and force of the driven boundary or tool along the loading direction,
         and its further values (:attr:`curve_columns`): the mesh's least scaled Jacobian
-        too when the mesh moves; collective."""
+        too when the mesh moves; collective. The state observed is a converged one: Newton's
+        residual floor keeps above the rounding of the force it carries
+        (:meth:`~soilbin.solver.newton.NewtonSolver.carry`)."""
         observation = self.drive.observe()
+        self.newton.carry(observation.force)
         if self.quality is None:
             return observation
         return dataclasses.replace(observation, columns={**observation.columns,
@@ -197,7 +200,8 @@ class SoilProblem:
         kind, this rank's array); with :meth:`restore`, a checkpoint (``app.checkpoint``)."""
         state = {"w": (DOFS, self.w_committed.x.array), "factors": (GLOBAL, self._factors),
                  "border_values": (GLOBAL, self._border_values),
-                 "force_scale": (GLOBAL, self.newton.force_scale)}
+                 "force_scale": (GLOBAL, self.newton.force_scale),
+                 "carried_force": (GLOBAL, self.newton.carried)}
         for name, part in self._stateful_parts().items():
             state.update({f"{name}/{key}": value for key, value in part.state().items()})
         return state
@@ -222,6 +226,7 @@ class SoilProblem:
         self._factor = self._factors[0]
         self._border_values = tuple(float(v) for v in state["border_values"])
         self.newton.include_force_scale(float(state["force_scale"]))
+        self.newton.carry(float(state.get("carried_force", 0.0)))   # absent from older checkpoints
         for name, part in self._stateful_parts().items():   # the mesh moves before the points
             part.restore({key.removeprefix(f"{name}/"): value for key, value in state.items()
                           if key.startswith(f"{name}/")})

@@ -4,7 +4,11 @@ The residual evaluation runs the constitutive update once per iterate; the
 Jacobian, assembled at the same iterate, reuses its tangent. Convergence is
 tested on the residual norm, relative to the step's initial residual or, as
 a floor, to the run's force scale (the largest initial residual seen so
-far), so that a step that starts near equilibrium does not chase round-off.
+far), so that a step that starts near equilibrium does not chase round-off;
+and never below the rounding of the forces the soil carries (``ROUNDING``
+times the largest force on the driven boundary so far, :meth:`carry`): a first
+step cut to 2^-30 of the load sets a force scale that the rounding of later,
+larger loads passes, and every step after it would stagnate.
 A diverged or failed solve raises :class:`NewtonFailure`, which the load
 stepper turns into a step cut.
 
@@ -65,6 +69,11 @@ CP_TRIALS, CP_TOLERANCE = 6, 0.2
 DIVERGENCE = 10.0
 #: Iterations without a new smallest residual that end the step.
 STAGNATION = 5
+#: The rounding of an assembled residual relative to the force it balances (about 1e-16
+#: times the element terms summed into a dof, with a margin): no floor goes below it.
+#: The elastic column's first step cut to 2^-30 of the load stagnated at 1e-15 of its
+#: force by the 16th step.
+ROUNDING = 1e-13
 
 
 class _Clock:
@@ -107,6 +116,7 @@ class NewtonSolver:
         self._dx = w.vector.duplicate()
         self._gap = w.vector.duplicate()
         self._force_scale = 0.0
+        self._carried = 0.0   # the largest force carried so far (:meth:`carry`)
         self._symmetric_tangent = symmetric_tangent
         #: Called at every iterate with (iteration, residual norm, target), e.g. for progress.
         self.on_iterate = None
@@ -124,6 +134,16 @@ class NewtonSolver:
     def include_force_scale(self, norm):
         """Make the residual floor relative to at least this force norm (e.g. of dead loads)."""
         self._force_scale = max(self._force_scale, norm)
+
+    def carry(self, force):
+        """The soil carries ``force`` (a converged step's force on the driven boundary): the
+        residual floor is at least ROUNDING times the largest such force."""
+        self._carried = max(self._carried, abs(force))
+
+    @property
+    def carried(self):
+        """The largest force :meth:`carry` was told of."""
+        return self._carried
 
     @property
     def force_scale(self):
@@ -205,7 +225,8 @@ class NewtonSolver:
     def _converged(self, residuals):
         if residuals[0] > 0.0 and len(residuals) == 1:
             self._force_scale = max(self._force_scale, residuals[0])
-        target = max(self._opts.rtol * residuals[0], self._opts.atol * self._force_scale)
+        target = max(self._opts.rtol * residuals[0], self._opts.atol * self._force_scale,
+                     ROUNDING * self._carried)
         if self.on_iterate is not None:
             self.on_iterate(len(residuals) - 1, residuals[-1], target)
         if not math.isfinite(residuals[-1]):
