@@ -134,19 +134,25 @@ def _mesh_cells(name: str, regions: Groups, boundaries: Groups, dimension: int,
 
 def _generate(name: str, dimension: int):
     """Mesh the model; an error of gmsh's mesher (a size or a shape it cannot honour) is an
-    InputError. gmsh 4.8 throws its errors (General.AbortOnError = 2, the API's default) from
-    inside its OpenMP region, where nothing can catch them and the process aborts; with 1 it
-    logs the error and stops meshing."""
+    InputError."""
+    errors = generate_logged(dimension)
+    if errors:
+        raise InputError(f"mesh builder {name!r}: gmsh cannot mesh the geometry of [mesh] "
+                         f"({errors[0]}); change its lengths or sizes")
+
+
+def generate_logged(dimension: int):
+    """Mesh the model up to ``dimension``; returns gmsh's error lines (none: it meshed). gmsh
+    4.8 throws its errors (General.AbortOnError = 2, the API's default) from inside its
+    OpenMP region, where nothing can catch them and the process aborts; with 1 it logs the
+    error and stops meshing."""
     gmsh.option.setNumber("General.AbortOnError", 1)
     gmsh.logger.start()
     try:
         gmsh.model.mesh.generate(dimension)
-        errors = [line for line in gmsh.logger.get() if line.startswith("Error")]
+        return [line for line in gmsh.logger.get() if line.startswith("Error")]
     finally:
         gmsh.logger.stop()
-    if errors:
-        raise InputError(f"mesh builder {name!r}: gmsh cannot mesh the geometry of [mesh] "
-                         f"({errors[0]}); change its lengths or sizes")
 
 
 def check_cells(error, source, dimension=3, simplices=False):

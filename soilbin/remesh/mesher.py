@@ -30,7 +30,7 @@ import re
 import gmsh
 import numpy as np
 
-from ..meshes.tagged import check_cells, distribute
+from ..meshes.tagged import check_cells, distribute, generate_logged
 from ..problem.mesh_quality import simplex_quality
 
 
@@ -238,13 +238,8 @@ def _least_quality():
 
 
 def _generate(dimension):
-    """Mesh; gmsh's errors (logged, General.AbortOnError = 1) raised as a RuntimeError."""
-    gmsh.option.setNumber("General.AbortOnError", 1)
-    gmsh.logger.start()
-    try:
-        gmsh.model.mesh.generate(dimension)
-        errors = [line for line in gmsh.logger.get() if line.startswith("Error")]
-    finally:
-        gmsh.logger.stop()
+    """Mesh; gmsh's errors (:func:`~soilbin.meshes.tagged.generate_logged`) raised as a
+    RuntimeError."""
+    errors = generate_logged(dimension)
     if errors:
         raise RuntimeError(f"gmsh cannot mesh the deformed soil ({errors[0]})")
