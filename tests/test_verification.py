@@ -33,6 +33,24 @@ def test_a_first_step_cut_to_2_to_the_minus_30_still_settles_pL_over_M(solve, co
     assert summary["top_settlement"] == pytest.approx(exact, rel=1e-8)
 
 
+def test_the_footing_in_other_units_takes_the_same_iterations_to_the_same_limit(solve):
+    """E and c in units 1e9 times larger (the lengths kept): the same Newton iterations and
+    the limit pressure scaled to 1e-9. The residual's prescribed rows hold the footing's
+    mismatch x - g (in) at a step's first iterate; counted in its norm beside forces of 1e-9
+    of the scene's, they made the first step's tolerance (rtol times that norm) so loose
+    that the run read 113.8 psi instead of 111.7 in 10 iterations instead of 46 (plain
+    quad4, whose rows are all forces)."""
+    limits = []
+    for scale in (1.0, 1e-9):
+        summary, _ = solve("strip-footing-von-mises", "analysis.element=quad4",
+                           f"materials.clay.E={30000.0 * scale!r}",
+                           f"materials.clay.c={17.5 * scale!r}")
+        assert summary["status"] == "complete"
+        limits.append((summary["newton_iterations"], summary["limit_pressure"] / scale))
+    assert limits[1][0] == limits[0][0]
+    assert limits[1][1] == pytest.approx(limits[0][1], rel=1e-9)
+
+
 @pytest.mark.parametrize("c, phi", [(500.0, 30.0), (100.0, 10.0), (20.0, 45.0)])
 def test_block_collapses_at_mohr_coulomb_uniaxial_strength(solve, c, phi):
     """VII.2, eq. 7.7: the compression cone gives 2c cos(phi)/(1 - sin(phi)) (1732 psf)."""

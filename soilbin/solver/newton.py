@@ -2,7 +2,11 @@
 
 The residual evaluation runs the constitutive update once per iterate; the
 Jacobian, assembled at the same iterate, reuses its tangent. Convergence is
-tested on the residual norm, relative to the step's initial residual or, as
+tested on the norm of the residual's equilibrium rows (not the prescribed rows,
+which hold a length at a displacement step's first iterate; the mean-dilatation
+elements' cell rows, a stress times a volume and a volume, still count: below
+1e-5 of the norm in the footing's psi and inches, they would swamp forces a
+billion times smaller), relative to the step's initial residual or, as
 a floor, to the run's force scale (the largest initial residual seen so
 far), so that a step that starts near equilibrium does not chase round-off;
 and never below the rounding of the forces the soil carries (``ROUNDING``
@@ -115,6 +119,13 @@ class NewtonSolver:
         self._assembler = ElementAssembler(self._a, w.function_space, bcs, self.matrix)
         self._dx = w.vector.duplicate()
         self._gap = w.vector.duplicate()
+        # 1 on the rows of the equilibrium equations, 0 on the prescribed ones: those hold the
+        # mismatch x - g of a displacement step's first iterate, a length, which the norm
+        # leaves out (it weighs forces, in any units)
+        self._equations = w.vector.duplicate()
+        self._equations.set(1.0)
+        fem.petsc.set_bc(self._equations, bcs, scale=0.0)
+        self._on_equations = w.vector.duplicate()
         self._force_scale = 0.0
         self._carried = 0.0   # the largest force carried so far (:meth:`carry`)
         self._symmetric_tangent = symmetric_tangent
@@ -170,7 +181,8 @@ class NewtonSolver:
         if self._held is not None:
             b.axpy(-self._held_fraction, self._held)
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
-        norm = b.norm()
+        self._on_equations.pointwiseMult(b, self._equations)
+        norm = self._on_equations.norm()
         if self._border is not None:
             self._border_g = self._border.residual()
             norm = math.hypot(norm, self._border_g)
