@@ -206,6 +206,23 @@ def test_collapse_pressure_is_where_the_settlement_per_step_blows_up():
     assert collapse_pressure(curve[:2] + [record(19.0, 0.052)]) == 19.0
 
 
+def test_the_collapse_pressures_reference_is_the_first_nominal_step():
+    """The secant at load factor 0.5 (the steps' nominal one; the first step was cut) is
+    the reference, as for a run's own stop: against the first step's (elastic) 50x would
+    read as collapse. A run that ended at the limit without such a step reads its last."""
+    curve = [step(0.25, 10.0, 1e-3), step(0.5, 20.0, 0.051), step(0.75, 30.0, 0.2),
+             step(1.0, 31.0, 0.7)]
+    assert collapse_pressure(curve[:2]) is None
+    assert collapse_pressure(curve, nominal=0.5) == 31.0
+    assert collapse_pressure(curve[:3], nominal=0.5) is None
+    assert collapse_pressure(curve[:3], nominal=0.5, at_limit=True) == 30.0
+    assert collapse_pressure(curve[:1], nominal=0.5, at_limit=True) == 10.0
+
+
+def step(factor, pressure, settlement):
+    return StepRecord(0, factor, settlement, pressure, 1, 0, 0, 0.0, (), {"pressure": pressure})
+
+
 def test_the_steady_force_is_the_mean_over_the_last_sixth_of_the_travel():
     """The plateau of a long travel: the force integrated over the last sixth of the final
     displacement (its start interpolated on the curve), over that length; the spread is its

@@ -18,11 +18,27 @@ def collapse_step(loads, displacements, reference=1):
     return None
 
 
-def collapse_pressure(records):
+def nominal_step(factors, nominal):
+    """Index of the first step (of load factors starting at zero) at the nominal increment
+    ``nominal`` or beyond, or None: the secant compliance there is the collapse criterion's
+    reference (:func:`collapse_limit`)."""
+    return next((k for k, factor in enumerate(factors) if k and factor >= nominal * (1 - 1e-9)),
+                None)
+
+
+def collapse_pressure(records, nominal=None, at_limit=False):
     """The pressure of the first step whose settlement increment per unit pressure increment
-    is at least COLLAPSE_COMPLIANCE times the first step's, or None."""
+    is at least COLLAPSE_COMPLIANCE times the secant one at the first step of the load factor
+    ``nominal`` (None: the first step), as :func:`collapse_limit` ends a run; where no step
+    is, and the run ended at the soil's limit all the same (``at_limit``: no step past the
+    last converged), the last step's pressure; else None."""
     pressures = [0.0] + [r.columns["pressure"] for r in records]
-    k = collapse_step(pressures, [0.0] + [r.displacement for r in records])
+    reference = 1 if nominal is None else nominal_step(
+        [0.0] + [r.load_factor for r in records], nominal)
+    k = None if reference is None else collapse_step(
+        pressures, [0.0] + [r.displacement for r in records], reference)
+    if k is None and at_limit and records:
+        return pressures[-1]
     return None if k is None else pressures[k]
 
 
@@ -37,11 +53,10 @@ def collapse_limit(scene):
     loading = scene.loading
     if loading.control is not Control.FORCE or not loading.until_collapse:
         return None
-    nominal = loading.magnitude / loading.steps
 
     def limit(records):
         loads = [0.0] + [r.load_factor * loading.magnitude for r in records]
-        reference = next((k for k, load in enumerate(loads) if load >= nominal * (1 - 1e-9)), None)
+        reference = nominal_step([0.0] + [r.load_factor for r in records], 1.0 / loading.steps)
         displacements = [0.0] + [r.displacement for r in records]
         if reference is None or collapse_step(loads, displacements, reference) is None:
             return None

@@ -64,9 +64,10 @@ def mesh_quality_results(records):
     return {"mesh_quality": min(qualities), "folded_at_step": folded_at_step(records)}
 
 
-def headline_results(scene, records):
+def headline_results(scene, records, at_limit=False):
     """The scene's headline values, read off the converged steps (the pressure: the curve's,
-    over the loaded boundary's current area)."""
+    over the loaded boundary's current area); ``at_limit``: the run ended at the soil's limit
+    (status "collapse")."""
     if not records:
         return {key: None for key in scene.headline}
     read = {
@@ -75,7 +76,8 @@ def headline_results(scene, records):
         Headline.FINAL_PRESSURE: lambda: records[-1].columns["pressure"],
         Headline.PEAK_FORCE: lambda: max(r.force for r in records),
         Headline.PEAK_PRESSURE: lambda: max(r.columns["pressure"] for r in records),
-        Headline.COLLAPSE_PRESSURE: lambda: collapse_pressure(records),
+        Headline.COLLAPSE_PRESSURE: lambda: collapse_pressure(records, 1.0 / scene.loading.steps,
+                                                              at_limit),
         Headline.FINAL_LIFT: lambda: records[-1].columns["lift"],
         Headline.STEADY_FORCE: lambda: steady_force(records),
         Headline.STEADY_SPREAD: lambda: steady_spread(records),
@@ -223,7 +225,7 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
         "setup_s": round(setup_s, 3),
         "wall_s": round(time.perf_counter() - start, 3),
         "cpu_s": round(time.process_time() - start_cpu, 3),
-        **headline_results(scene, records),
+        **headline_results(scene, records, at_limit=status == "collapse"),
         **mesh_quality_results(records),
         **({} if remeshing is None else {"remeshes": remeshing.count}),
     }

@@ -72,10 +72,14 @@ class Headline(enum.Enum):
     settlement and compressive pressure are positive (geomechanics signs).
     ``collapse_pressure`` is the pressure of the first step whose settlement
     increment per unit pressure increment is at least ``COLLAPSE_COMPLIANCE``
-    times the first step's (the elastic compliance): where the settlement per
+    times the secant one at the first nominal step (1/steps of the load; the
+    elastic compliance), as a run to collapse stops: where the settlement per
     step blows up (or the first step at which the pressure falls). It does not depend on how far Newton gets past that point
     (in large deformation the geometry keeps the curve rising slowly and the
-    last converged load does), and is none if no step gets there.
+    last converged load does). Where no step gets there and the run ended at the
+    soil's limit all the same (no larger load converged, status "collapse": with
+    ``steps = 1`` the strip load's limit lies below the first nominal step), it is
+    the last converged step's pressure; else none.
     The pressures are a loaded boundary's; ``final_lift`` is a tool's (the soil's
     upward force on it: a rough wall's friction). ``steady_force`` is the force averaged over
     the last sixth of the travel (the plateau of a tool pushed far: the steady draft over the

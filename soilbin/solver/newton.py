@@ -2,11 +2,12 @@
 
 The residual evaluation runs the constitutive update once per iterate; the
 Jacobian, assembled at the same iterate, reuses its tangent. Convergence is
-tested on the norm of the residual's equilibrium rows (not the prescribed rows,
-which hold a length at a displacement step's first iterate; the mean-dilatation
-elements' cell rows, a stress times a volume and a volume, still count: below
-1e-5 of the norm in the footing's psi and inches, they would swamp forces a
-billion times smaller), relative to the step's initial residual or, as
+tested on the residual norm, relative to the step's initial residual (its norm
+over the equilibrium rows: at a displacement step's first iterate the prescribed
+rows hold the mismatch g - x, a length, which would make the tolerance depend on
+the units; the mean-dilatation elements' cell rows, a stress times a volume and
+a volume, still count: below 1e-5 of the norm in the footing's psi and inches,
+they would swamp forces a billion times smaller) or, as
 a floor, to the run's force scale (the largest initial residual seen so
 far), so that a step that starts near equilibrium does not chase round-off;
 and never below the rounding of the forces the soil carries (``ROUNDING``
@@ -120,12 +121,13 @@ class NewtonSolver:
         self._dx = w.vector.duplicate()
         self._gap = w.vector.duplicate()
         # 1 on the rows of the equilibrium equations, 0 on the prescribed ones: those hold the
-        # mismatch x - g of a displacement step's first iterate, a length, which the norm
-        # leaves out (it weighs forces, in any units)
+        # mismatch x - g of a displacement step's first iterate, a length, which the step's
+        # first norm leaves out (the tolerance it sets is a force, in any units)
         self._equations = w.vector.duplicate()
         self._equations.set(1.0)
         fem.petsc.set_bc(self._equations, bcs, scale=0.0)
         self._on_equations = w.vector.duplicate()
+        self._equilibrium = 0.0   # the last residual's norm over the equilibrium rows
         self._force_scale = 0.0
         self._carried = 0.0   # the largest force carried so far (:meth:`carry`)
         self._symmetric_tangent = symmetric_tangent
@@ -181,11 +183,13 @@ class NewtonSolver:
         if self._held is not None:
             b.axpy(-self._held_fraction, self._held)
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
+        norm = b.norm()
         self._on_equations.pointwiseMult(b, self._equations)
-        norm = self._on_equations.norm()
+        self._equilibrium = self._on_equations.norm()
         if self._border is not None:
             self._border_g = self._border.residual()
             norm = math.hypot(norm, self._border_g)
+            self._equilibrium = math.hypot(self._equilibrium, self._border_g)
         return norm
 
     def hold_out_of_balance(self, fraction):
@@ -234,10 +238,13 @@ class NewtonSolver:
             self.jacobian()
         self.linear.set_operator(self.matrix, self._symmetric_tangent)
 
-    def _converged(self, residuals):
-        if residuals[0] > 0.0 and len(residuals) == 1:
-            self._force_scale = max(self._force_scale, residuals[0])
-        target = max(self._opts.rtol * residuals[0], self._opts.atol * self._force_scale,
+    def _converged(self, residuals, first):
+        """Whether the last residual is within the step's tolerance: rtol of ``first``, the
+        first residual's norm over the equilibrium rows, atol of the force scale (which
+        ``first`` joins), ROUNDING of the force carried."""
+        if first > 0.0 and len(residuals) == 1:
+            self._force_scale = max(self._force_scale, first)
+        target = max(self._opts.rtol * first, self._opts.atol * self._force_scale,
                      ROUNDING * self._carried)
         if self.on_iterate is not None:
             self.on_iterate(len(residuals) - 1, residuals[-1], target)
@@ -273,8 +280,9 @@ class NewtonSolver:
         x = self._w.vector.duplicate()
         try:
             residuals.append(self.residual(self._b))
+            first = self._equilibrium
             while True:
-                if self._converged(residuals):
+                if self._converged(residuals, first):
                     self.stats["iterations"] += len(residuals) - 1
                     return NewtonResult(len(residuals) - 1, tuple(residuals))
                 self._check_progress(residuals)
