@@ -280,7 +280,9 @@ class NewtonSolver:
         x = self._w.vector.duplicate()
         try:
             residuals.append(self.residual(self._b))
-            first = self._equilibrium
+            # the tolerance's force: the first residual's equilibrium rows (the whole first
+            # residual where those are zero: every row prescribed, as in the simple shear)
+            first = self._equilibrium or residuals[0]
             while True:
                 if self._converged(residuals, first):
                     self.stats["iterations"] += len(residuals) - 1
