@@ -1,6 +1,6 @@
 """The blade from a STEP file on tetrahedra against the built-in blade on bricks, both
 under force control to 108 lb: studies/tine-cad-blade.toml (tet10-bbar, six meshes) and
-studies/tine-blade-hex27.toml (hex27-bbar, two), beside `make run`'s trilinear bricks; the
+studies/tine-blade-hex27.toml (hex27-bbar, four), beside `make run`'s trilinear bricks; the
 tine-cad-blade tables of docs/chapter8.md.
 
 Runs both studies (resumable; --out DIR holds them and `make run`'s scene, run there if
