@@ -1,5 +1,5 @@
 """The blade from a STEP file on tetrahedra against the built-in blade on bricks, both
-under force control to 108 lb: studies/tine-cad-blade.toml (tet10-bbar, six meshes) and
+under force control to 108 lb: studies/tine-cad-blade.toml (tet10-bbar, seven meshes) and
 studies/tine-blade-hex27.toml (hex27-bbar, four), beside `make run`'s trilinear bricks; the
 tine-cad-blade tables of docs/chapter8.md.
 
