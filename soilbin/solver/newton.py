@@ -127,7 +127,6 @@ class NewtonSolver:
         self._equations.set(1.0)
         fem.petsc.set_bc(self._equations, bcs, scale=0.0)
         self._on_equations = w.vector.duplicate()
-        self._equilibrium = 0.0   # the last residual's norm over the equilibrium rows
         self._force_scale = 0.0
         self._carried = 0.0   # the largest force carried so far (:meth:`carry`)
         self._symmetric_tangent = symmetric_tangent
@@ -184,13 +183,17 @@ class NewtonSolver:
             b.axpy(-self._held_fraction, self._held)
         fem.petsc.set_bc(b, self._bcs, x, -1.0)
         norm = b.norm()
-        self._on_equations.pointwiseMult(b, self._equations)
-        self._equilibrium = self._on_equations.norm()
         if self._border is not None:
             self._border_g = self._border.residual()
             norm = math.hypot(norm, self._border_g)
-            self._equilibrium = math.hypot(self._equilibrium, self._border_g)
         return norm
+
+    def _equilibrium_norm(self):
+        """The norm of the last residual (in ``self._b``) over the equilibrium rows, with the
+        border's equation."""
+        self._on_equations.pointwiseMult(self._b, self._equations)
+        norm = self._on_equations.norm()
+        return norm if self._border is None else math.hypot(norm, self._border_g)
 
     def hold_out_of_balance(self, fraction):
         """From now on solve R(w) = ``fraction`` R(w_0), R(w_0) the residual at the current
@@ -282,7 +285,7 @@ class NewtonSolver:
             residuals.append(self.residual(self._b))
             # the tolerance's force: the first residual's equilibrium rows (the whole first
             # residual where those are zero: every row prescribed, as in the simple shear)
-            first = self._equilibrium or residuals[0]
+            first = self._equilibrium_norm() or residuals[0]
             while True:
                 if self._converged(residuals, first):
                     self.stats["iterations"] += len(residuals) - 1
