@@ -59,7 +59,7 @@ def test_a_linear_field_is_transferred_exactly():
     targets = np.einsum("mk,mkd->md", rng.dirichlet(np.ones(4), 200),
                         corners[rng.integers(0, len(corners), 200)])
     located = old.locate(targets)
-    assert np.allclose(old.at_points(samples, field(samples), located), field(targets),
+    assert np.allclose(old.at_points(samples, located)(field(samples)), field(targets),
                        rtol=0.0, atol=1e-12)
     assert np.allclose(old.at_nodes(field(corners), located), field(targets), rtol=0.0,
                        atol=1e-12)
@@ -81,7 +81,7 @@ def test_a_linear_field_is_transferred_exactly_between_tetrahedra():
     targets = np.einsum("mk,mkd->md", rng.dirichlet(np.ones(4), 100),
                         corners[rng.integers(0, 6, 100)])
     located = old.locate(targets)
-    assert np.allclose(old.at_points(samples, field(samples), located), field(targets),
+    assert np.allclose(old.at_points(samples, located)(field(samples)), field(targets),
                        rtol=0.0, atol=1e-12)
     assert np.allclose(old.at_nodes(field(corners), located), field(targets), rtol=0.0,
                        atol=1e-12)
@@ -375,7 +375,7 @@ def test_one_point_per_cell_is_transferred_as_its_cell_value():
     samples = corners.mean(axis=1, keepdims=True)
     values = np.arange(len(corners), dtype=float)[:, None, None] * np.ones((1, 1, 2))
     targets = np.einsum("k,nkd->nd", [0.1, 0.2, 0.3, 0.4], corners)   # one inside each cell
-    moved = old.at_points(samples, values, old.locate(targets))
+    moved = old.at_points(samples, old.locate(targets))(values)
     assert np.array_equal(moved, values[:, 0])
 
 

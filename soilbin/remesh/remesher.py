@@ -315,14 +315,14 @@ def _transfer(state, target, samples, points, element):
     the new ones."""
     d = samples.shape[2]
     old = OldCells(state["kinematics/mesh_x"][1][:, :, :d], element.simplex)
-    at_points = old.locate(points.reshape(-1, d))
+    at_points = old.at_points(samples, old.locate(points.reshape(-1, d)))
     new_corners = target["kinematics/mesh_x"][1]
     at_nodes = old.locate(new_corners[:, :, :d].reshape(-1, d))
     for name, (kind, values) in target.items():
         if kind == GLOBAL:
             target[name] = state[name]
         elif kind == POINTS and name != "points/converged_tangent":
-            moved = old.at_points(samples, state[name][1], at_points)
+            moved = at_points(state[name][1])
             target[name] = (kind, moved.reshape(values.shape))
     total = state["kinematics/total_displacement"][1]
     moved = old.at_nodes(total, at_nodes)

@@ -82,21 +82,27 @@ class OldCells:
                                                              self.mesh, x[missing])
         return x, cells
 
-    def at_points(self, samples, values, located):
-        """Values (n, q, ...) of every old cell at its points ``samples`` (n, q, d), fitted
-        linearly (module doc) and evaluated at ``located`` (:meth:`locate`'s); (m, ...)."""
-        n, q = values.shape[:2]
-        shape = values.shape[2:]
+    def at_points(self, samples, located):
+        """The move of quadrature data to ``located`` (:meth:`locate`'s): a function of the
+        values (n, q, ...) of every old cell at its points ``samples`` (n, q, d), each cell's
+        fitted linearly (module doc), giving their values there (m, ...). The fit depends on
+        the points only, so it is solved once for all the fields."""
+        n, q = samples.shape[:2]
         centre = samples.mean(axis=1, keepdims=True)
         basis = np.concatenate([np.ones((n, q, 1)), samples - centre], axis=2)   # (n, q, 1 + d)
         normal = np.einsum("nqa,nqb->nab", basis, basis)
-        right = np.einsum("nqa,nqk->nak", basis, values.reshape(n, q, -1))
-        # least squares, or the cell's value with no gradient where one point (a reduced rule)
-        coefficients = np.linalg.pinv(normal) @ right                         # (n, 1 + d, k)
+        # least squares, or the cell's value with no gradient where one point (a reduced rule):
+        # the coefficients of a cell's polynomial are fit @ its values
+        fit = np.linalg.pinv(normal) @ basis.transpose(0, 2, 1)                 # (n, 1 + d, q)
         x, simplices = located
         cell = self.parent[simplices]
         local = np.concatenate([np.ones((len(x), 1)), x[:, :self._dim] - centre[cell, 0]], axis=1)
-        return np.einsum("ma,mak->mk", local, coefficients[cell]).reshape((len(x),) + shape)
+        weights = np.einsum("ma,maq->mq", local, fit[cell])
+
+        def moved(values):
+            flat = values.reshape(n, q, -1)[cell]
+            return np.einsum("mq,mqk->mk", weights, flat).reshape((len(x),) + values.shape[2:])
+        return moved
 
     def at_nodes(self, values, located):
         """Values (n, k, ...) at every old cell's corners, interpolated linearly over the
