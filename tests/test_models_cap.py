@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from soilbin.models import MODELS, DiMaggioSandler, ModifiedCap
-from soilbin.models.cap import SECTION_VII5, CapHardening
+from soilbin.models.cap import SECTION_VII5, CapHardening, cap_return
+from soilbin.models.invariant_return import local_settings, smooth_return, strain_row
+from soilbin.models.yield_surfaces import CAP_C, CAP_R, G_, K_, cap_compaction, cap_failure
 from soilbin.params import from_table
 from soilbin.tensors import IDENTITY, SQRT2, deviator, trace
 
@@ -381,3 +383,36 @@ def test_a_point_that_crossed_between_the_vertices_gets_the_failure_surface_tang
     assert IDENTITY @ own @ IDENTITY == pytest.approx(0.0, abs=1e-9 * np.abs(own).max())
     assert IDENTITY @ crossed @ IDENTITY > 0.01 * model.K
     np.testing.assert_allclose(crossed, failure_side, rtol=0.0, atol=1e-5 * np.abs(failure_side).max())
+
+
+@pytest.mark.parametrize("model", ALL, ids=model_id)
+def test_the_cap_return_in_two_unknowns_is_the_general_local_problems(model):
+    """The return onto a free cap in (mu, kappa) (cap_return, 2 x 2) and the general local
+    Newton in (p, J, dgamma, kappa) (smooth_return, 4 x 4), from the same trial states
+    beyond the cap: the same p, J, kappa (to 1e-11) and sensitivities (p_e, p_J, J_e, J_J;
+    to 1e-12 of K or 1)."""
+    prm, rng, settings = model.prm, np.random.default_rng(11), local_settings()
+    K, G, R = prm[K_], prm[G_], prm[CAP_R]
+    s_n, n = np.zeros(6), unit_deviator(3)
+    for _ in range(300):
+        kappa_n = rng.uniform(model.L_min + 0.1, 80.0)
+        F = cap_failure(prm, kappa_n)[0]
+        I1_tr = kappa_n + R * F * rng.uniform(0.0, 3.0)
+        J_tr = F * rng.uniform(0.0, 1.5)
+        if math.hypot((I1_tr - kappa_n) / R, J_tr) <= 1.01 * F:
+            continue
+        p_n = kappa_n / 3.0 - rng.uniform(0.0, 1.0)
+        p_tr = I1_tr / 3.0
+        de_v = (p_tr - p_n) / K
+        scale = 3.0 * abs(p_tr) + J_tr + abs(kappa_n + R * F) + prm[CAP_C]
+        H_n, row = cap_compaction(prm, kappa_n)[0], strain_row(prm, p_tr, scale)
+        p, J, kappa, sens, ok = cap_return(prm, p_tr, J_tr, H_n, 0.0, kappa_n, scale, row,
+                                           settings)
+        lp = (p_n, de_v, J_tr, kappa_n, scale, 0.0, H_n, row)
+        cold = (p_tr, J_tr, 0.0, kappa_n)
+        general = smooth_return(prm, lp, s_n, SQRT2 * J_tr * n, cold, cold, settings)
+        assert ok and general[-1]
+        np.testing.assert_allclose((p, J, kappa), (general[0], general[1], general[3]),
+                                   rtol=1e-11, atol=1e-11 * scale)
+        # p_e and J_e are moduli, p_J and J_J ratios
+        assert (np.abs(np.subtract(sens, general[4])) <= 1e-12 * np.array((K, 1.0, K, 1.0))).all()

@@ -5,7 +5,8 @@ tension cut-off. Return mapping after Simo, Ju, Pister & Taylor (1988)
 and Hofstetter, Simo & Taylor (1993): the trial state's region in the
 (I1, sqrt(J2)) plane picks the active surface or corner, and only the cap
 needs a local Newton (the failure surface does not harden: a bracketed scalar
-equation; corners and cut-off: closed form).
+equation; corners and cut-off: closed form), on a free cap in two unknowns
+(:func:`cap_equations`: linear elasticity gives the stress in closed form).
 
 Compression positive inside (see :mod:`.invariant_return`): I1 = 3p = -tr(sigma),
 J = sqrt(J2). The two models differ only in the failure function F::
@@ -105,7 +106,8 @@ Regions of the trial state (I1_tr, J_tr), with L = L_n (the failure surface
 is fixed; the cap's normal at its corner (L, F(L)) is purely deviatoric; the
 failure surface's "normal" is the return direction along its potential)::
 
-    cap         I1_tr > L and f_C > 0            local Newton (p, J, dgamma, kappa);
+    cap         I1_tr > L and f_C > 0            local Newton in (dgamma / rho, kappa), or
+                (p, J, dgamma, kappa) where that fails or the cap has retreated;
                 where it has no root (the trial above the corner of a cap that can
                 hardly harden any more), the cap corner (L, F(L)), L moving ahead
     cap corner  I1_tr <= L, beyond the failure return at L      (L, F(L)), L moving
@@ -135,15 +137,15 @@ from ..tensors import IDENTITY
 from .base import APEX, CAP, CAP_CORNER, CUTOFF, ELASTIC, FAILURE, SHEAR, Sample
 from .cone import tension_cutoff_param
 from .elastic import IsotropicElasticity
-from .invariant_return import (YIELD_TOL, bracketed_root, bulk_compliance, bulk_pressure,
-                               bulk_strain, check_converged, finish, invariants, local_settings,
-                               point_invariants, smooth_return, solved_ratio, strain_row,
-                               trial_split)
+from .invariant_return import (NEWTON_TOL, STALL_TOL, YIELD_TOL, bracketed_root,
+                               bulk_compliance, bulk_pressure, bulk_strain, check_converged,
+                               finish, invariants, local_settings, point_invariants,
+                               smooth_return, solved_ratio, strain_row, trial_split)
 from .jit import kernel
 from .yield_surfaces import (CAP_A, CAP_B, CAP_BETA, CAP_C, CAP_D, CAP_R, CAP_SURFACE, CAP_W,
                              DF_LO, ETA_D, EXPONENTIAL, F_MIN, G_, J_LO, K_, L_MIN, LOG_SHIFT,
                              P_LO, PRM_SLOTS, SURFACE, VOLUMETRIC, X_MIN, cap_compaction,
-                             cap_failure, smooth_surface)
+                             cap_failure, compaction_of, smooth_surface)
 
 #: Section VII.5's artificial soil (psi, 1/psi): the modified cap's parameters.
 SECTION_VII5 = {"E": 4000.0, "nu": 0.35, "A": 5.6, "B": 0.11, "C": 5.6, "beta": 0.062,
@@ -301,6 +303,125 @@ def warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L):
     return p, J, max((c * f_p + shear * f_J) / (f_p**2 + f_J**2), 0.0), guess_L
 
 
+#: How close to the cap (relative to its height) a root of :func:`cap_return` must be.
+ON_CAP = 1e-10
+
+
+@kernel
+def cap_equations(prm, p_tr, J_tr, H_n, mu, kappa):
+    """The cap's return reduced to two unknowns, mu = dgamma / rho and kappa, on a free cap
+    (L = kappa) with linear elasticity. The two strain splits of the local problem
+    (:mod:`.invariant_return`, f_p = 3a / (R rho), f_J = J / rho) give the stress::
+
+        J = J_tr / (1 + G mu),   a = (3p - kappa) / R = R (3 p_tr - kappa) / (R^2 + 9 K mu),
+
+    rho = sqrt(a^2 + J^2), and leave the consistency and the hardening (B.10, B.11)::
+
+        g_f = rho - F(kappa),   g_h = H(kappa) - H_n - 3 mu a / R
+
+    (3 mu a / R = dgamma f_p, the step's plastic compaction). Returns (g_f, g_h), their
+    Jacobian in (mu, kappa) (4 numbers, row by row) and (a, J, rho, 1 / (R^2 + 9 K mu))."""
+    K, G, R = prm[K_], prm[G_], prm[CAP_R]
+    c = 1.0 / (R * R + 9.0 * K * mu)
+    a, J = R * (3.0 * p_tr - kappa) * c, J_tr / (1.0 + G * mu)
+    rho = math.hypot(a, J)
+    F, dF, _ = cap_failure(prm, kappa)
+    H, dH = compaction_of(prm, kappa, F, dF)
+    a_mu, a_k, J_mu = -9.0 * K * a * c, -R * c, -G * J / (1.0 + G * mu)
+    return ((rho - F, H - H_n - 3.0 * mu * a / R),
+            ((a * a_mu + J * J_mu) / rho, a * a_k / rho - dF,
+             -3.0 * (a + mu * a_mu) / R, dH - 3.0 * mu * a_k / R),
+            (a, J, rho, c))
+
+
+@kernel
+def cap_admissible(prm, mu, kappa):
+    """Where the iterates of :func:`cap_return` may go: the free cap, 1 + G mu > 0 and
+    R^2 + 9 K mu > 0."""
+    return kappa >= prm[L_MIN] and mu > -1.0 / (prm[G_] + 9.0 * prm[K_] / prm[CAP_R]**2)
+
+
+@kernel
+def cap_solve(jac, b0, b1):
+    """(mu, kappa) solving the 2 x 2 ``jac`` (row by row) times them = (b0, b1)."""
+    det = jac[0] * jac[3] - jac[1] * jac[2]
+    return (jac[3] * b0 - jac[1] * b1) / det, (jac[0] * b1 - jac[2] * b0) / det
+
+
+@kernel
+def cap_norm(g, scale, row):
+    """The largest residual of :func:`cap_equations`, scaled as the general local problem's:
+    the consistency by the stress scale, the hardening as a strain."""
+    return max(abs(g[0]) / scale, abs(g[1]) * row)
+
+
+@kernel
+def norm_merit(g, scale, row):
+    """|g|^2 / 2 of the scaled residuals of :func:`cap_equations`."""
+    return 0.5 * ((g[0] / scale)**2 + (g[1] * row)**2)
+
+
+@kernel
+def cap_return(prm, p_tr, J_tr, H_n, mu, kappa, scale, row, settings):
+    """The return onto a free cap of a soil with linear elasticity: Newton on the two
+    unknowns of :func:`cap_equations` from (mu, kappa), with the general local Newton's
+    tolerance, backtracking and polishing step
+    (:func:`~.invariant_return.local_newton`): the same backward-Euler solution as
+    :func:`~.invariant_return.smooth_return`, a 2 x 2 system instead of 4 x 4. Where it fails
+    (an iterate off the free cap, dgamma < 0 at the root, no convergence) the caller solves
+    the general local problem. Returns (p, J, kappa, (p_e, p_J, J_e, J_J), converged)."""
+    failed = (0.0, 0.0, kappa, (0.0, 0.0, 0.0, 0.0), False)
+    if not cap_admissible(prm, mu, kappa):
+        return failed
+    g, jac, _ = cap_equations(prm, p_tr, J_tr, H_n, mu, kappa)
+    converged = False
+    for _ in range(settings[0]):
+        norm = cap_norm(g, scale, row)
+        if norm <= NEWTON_TOL:
+            converged = True
+            break
+        d_mu, d_k = cap_solve(jac, -g[0], -g[1])
+        merit, step, moved = norm_merit(g, scale, row), 1.0, False
+        for _ in range(settings[1]):
+            mu_t, kappa_t = mu + step * d_mu, kappa + step * d_k
+            if cap_admissible(prm, mu_t, kappa_t):
+                g_t, jac_t, _ = cap_equations(prm, p_tr, J_tr, H_n, mu_t, kappa_t)
+                merit_t = norm_merit(g_t, scale, row)
+                if np.isfinite(merit_t) and merit_t <= (1.0 - 1e-4 * step) * merit:
+                    mu, kappa, g, jac, moved = mu_t, kappa_t, g_t, jac_t, True
+                    break
+            step *= 0.5
+        if not moved:
+            converged = norm <= STALL_TOL     # stalled at the rounding floor
+            break
+    if not converged:
+        return failed
+    # Polish with one more full step.
+    d_mu, d_k = cap_solve(jac, -g[0], -g[1])
+    if cap_admissible(prm, mu + d_mu, kappa + d_k):
+        g_t, jac_t, _ = cap_equations(prm, p_tr, J_tr, H_n, mu + d_mu, kappa + d_k)
+        norm_t = cap_norm(g_t, scale, row)
+        if np.isfinite(norm_t) and norm_t <= cap_norm(g, scale, row):
+            mu, kappa, jac = mu + d_mu, kappa + d_k, jac_t
+    K, G, R = prm[K_], prm[G_], prm[CAP_R]
+    g, _, (a, J, rho, c) = cap_equations(prm, p_tr, J_tr, H_n, mu, kappa)
+    # a root with dgamma >= 0 on the cap's half of the ellipse (3p >= L), on it to ON_CAP of
+    # its height: the tolerance scaled by the trial's stress is loose where the trial is
+    # far out (a shear of 1e15 G put a point 1e5 times above a cap 5.6 psi high)
+    if mu < 0.0 or a < 0.0 or not abs(g[0]) <= ON_CAP * (rho - g[0]):
+        return failed
+    # The sensitivities by the implicit-function theorem on g(mu, kappa; p_tr, J_tr) = 0,
+    # with dp_tr/de_v = K: d(mu, kappa) = -jac^-1 dg/dq for q = p_tr, J_tr.
+    a_p, J_J0 = 3.0 * R * c, 1.0 / (1.0 + G * mu)
+    a_mu, a_k, J_mu = -9.0 * K * a * c, -R * c, -G * J * J_J0
+    mu_p, k_p = cap_solve(jac, -a * a_p / rho, 3.0 * mu * a_p / R)
+    mu_J, k_J = cap_solve(jac, -J * J_J0 / rho, 0.0)
+    p_p = (k_p + R * (a_p + a_mu * mu_p + a_k * k_p)) / 3.0
+    p_J = (k_J + R * (a_mu * mu_J + a_k * k_J)) / 3.0
+    return ((kappa + R * a) / 3.0, J, kappa,
+            (K * p_p, p_J, K * J_mu * mu_p, J_J0 + J_mu * mu_J), True)
+
+
 @kernel
 def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settings,
               sigma, C, s_n, s_tr, n):
@@ -365,16 +486,25 @@ def cap_point(prm, deps, stress_n, L_n, X_n, last, guess_stress, guess_L, settin
         F, dF, d2F = cap_failure(prm, 3.0 * p)
         J, sens, code = F, failure_sensitivities(prm, p, J_tr, F, dF, d2F), FAILURE
     elif cap:
-        # Onto the hardening cap (smooth_return with h = kappa, the cap centre
-        # L = max(kappa, L_min)), from the trial state or, where the last iterate was on
-        # a free cap, from it.
-        lp = (p_n, de_v, J_tr, kappa_n, scale, 0.0, cap_compaction(prm, kappa_n)[0],
-              strain_row(prm, p_tr, scale))
-        cold = (p_tr, J_tr, 0.0, kappa_n)
-        x0 = cold
+        # Onto the hardening cap: in two unknowns on a free cap (cap_return), else the
+        # general local problem (smooth_return with h = kappa, the cap centre
+        # L = max(kappa, L_min)); from the trial state or, where the last iterate was on a
+        # free cap, from it (there J = J_tr / (1 + G mu) gives mu).
+        H_n, row = cap_compaction(prm, kappa_n)[0], strain_row(prm, p_tr, scale)
+        mu0, k0 = 0.0, kappa_n
         if last == CAP and guess_L > L_min:
-            x0 = warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L)
-        p, J, _, kappa, sens, ok = smooth_return(prm, lp, s_n, s_tr, x0, cold, settings)
+            J_g = point_invariants(guess_stress)[1]
+            if J_g > 0.0:
+                mu0, k0 = max((J_tr / J_g - 1.0) / prm[G_], 0.0), guess_L
+        p, J, kappa, sens, ok = cap_return(prm, p_tr, J_tr, H_n, mu0, k0, scale, row,
+                                           settings)
+        if not ok:
+            lp = (p_n, de_v, J_tr, kappa_n, scale, 0.0, H_n, row)
+            cold = (p_tr, J_tr, 0.0, kappa_n)
+            x0 = cold
+            if last == CAP and guess_L > L_min:
+                x0 = warm_start(prm, p_n, de_v, J_tr, guess_stress, guess_L)
+            p, J, _, kappa, sens, ok = smooth_return(prm, lp, s_n, s_tr, x0, cold, settings)
         code = CAP
         if not ok:
             kappa, p, J, sens, code, ok = advancing_corner(prm, p_n, de_v, kappa_n, L_n,

@@ -55,6 +55,12 @@ def cap_compaction(prm, L):
     """(H, dH/dL): the plastic compaction W (1 - exp(-D X(L))) of the cap at L (B.11),
     X(L) = L + R F(L)."""
     F, dF, _ = cap_failure(prm, L)
+    return compaction_of(prm, L, F, dF)
+
+
+@kernel
+def compaction_of(prm, L, F, dF):
+    """:func:`cap_compaction` given (F, F') at L."""
     e = np.exp(-prm[CAP_D] * (L + prm[CAP_R] * F))
     return prm[CAP_W] * (1.0 - e), prm[CAP_W] * prm[CAP_D] * e * (1.0 + prm[CAP_R] * dF)
 
