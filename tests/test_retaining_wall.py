@@ -88,6 +88,19 @@ def test_smooth_wall_passive_coefficient_is_rankine_within_five_percent(solve, p
     assert summary["passive_coefficient"] == pytest.approx(rankine_passive(phi), rel=0.05)
 
 
+
+def test_a_nearly_incompressible_sand_fails_under_bt_with_the_hint_and_completes_under_cp(solve):
+    """nu = 0.49: the backtracking line search stalls in the first steps (the failure names
+    the critical-point one, docs/user-guide.md), which takes the wall to its full push with
+    Kp within 0.1% of nu = 0.3's."""
+    failed, _ = solve("retaining-wall-passive", "materials.sand.nu=0.49")
+    assert failed["status"] == "failed"
+    assert "failed with the smallest increment" in failed["message"]
+    assert "--set solver.line_search=cp may get past it" in failed["message"]
+    done, _ = solve("retaining-wall-passive", "materials.sand.nu=0.49", "solver.line_search=cp")
+    assert done["status"] == "complete"
+    assert done["passive_coefficient"] == pytest.approx(3.58268736201046, rel=1e-3)
+
 def passive_run(solve_file, *overrides):
     """(Kp, fraction of the material points at the cone's apex) at the end of the push."""
     _, rows, problem = solve_file(SCENES / "retaining-wall-passive.toml", *overrides)

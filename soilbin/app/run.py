@@ -12,7 +12,7 @@ from ..errors import InputError, ReturnMapError
 from ..layout import CellLayout
 from ..meshes import scene_mesh
 from ..problem import SoilProblem
-from ..records.scene import Headline
+from ..records.scene import Control, Headline, LineSearch
 from ..remesh import RemeshError, Remeshing
 from ..remesh.mesher import read_mesh
 from ..solver.ahead import compiled_ahead
@@ -202,6 +202,8 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
         status = "collapse"
     else:
         status = "failed"
+    message = result.message + (line_search_hint(scene) if status == "failed" and result.stalled
+                                 else "")
     records = result.steps
     summary = {
         "scene": scene.name,
@@ -212,7 +214,7 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
            if earlier is not None else {}),
         "status": status,
         "converged": status in ("complete", "collapse"),
-        "message": result.message,
+        "message": message,
         "n_cells": problem.mesh.topology.index_map(problem.mesh.topology.dim).size_global,
         "n_dofs": problem.n_dofs,
         "n_ranks": comm.size,
@@ -255,3 +257,14 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
         if failure:
             print(f"soilbin: warning: soil-3d.png not drawn: {failure}", file=sys.stderr)
     return summary
+
+
+def line_search_hint(scene):
+    """What a run that failed with the smallest increment under the backtracking line search
+    may try (docs/theory.md, *Line searches*); '' where that does not apply."""
+    if (scene.solver.line_search is not LineSearch.BACKTRACKING
+            or scene.loading.control is Control.INDIRECT):
+        return ""
+    return ("; --set solver.line_search=cp may get past it (the energy's stationary point "
+            "along the Newton step, which converges where the residual norm rises along steps "
+            "that lower the energy, as on a nearly incompressible soil)")

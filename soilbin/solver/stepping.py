@@ -88,6 +88,7 @@ class StepperResult:
     complete: bool          # reached load factor 1
     message: str            # why it stopped early ('' when complete)
     limit_reached: bool = False   # stopped by the ``limit`` callback
+    stalled: bool = False   # a step failed with the smallest increment
 
 
 def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time.perf_counter,
@@ -121,7 +122,8 @@ def run_load_steps(problem: SteppedProblem, steps, max_cuts, on_step, clock=time
             if level == max_cuts:
                 return StepperResult(tuple(records), False,
                                      f"step to load factor {factor + increment:.6g} failed with the "
-                                     f"smallest increment, 1/{steps * 2**max_cuts} ({err})")
+                                     f"smallest increment, 1/{steps * 2**max_cuts} ({err})",
+                                     stalled=True)
             cuts += 1
             level += 1
             held = regrow_after_cut
