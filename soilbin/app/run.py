@@ -265,6 +265,6 @@ def line_search_hint(scene):
     if (scene.solver.line_search is not LineSearch.BACKTRACKING
             or scene.loading.control is Control.INDIRECT):
         return ""
-    return ("; --set solver.line_search=cp may get past it (the energy's stationary point "
-            "along the Newton step, which converges where the residual norm rises along steps "
-            "that lower the energy, as on a nearly incompressible soil)")
+    return ("; --set solver.line_search=cp may get past it (the line search to the energy's "
+            "stationary point along the Newton step goes on where the residual norm rises "
+            "along steps that lower the energy, as on a nearly incompressible soil)")
