@@ -357,7 +357,7 @@ def cap_norm(g, scale, row):
 
 @kernel
 def norm_merit(g, scale, row):
-    """|g|^2 / 2 of the scaled residuals of :func:`cap_equations`."""
+    """``|g|^2 / 2`` of the scaled residuals of :func:`cap_equations`."""
     return 0.5 * ((g[0] / scale)**2 + (g[1] * row)**2)
 
 
