@@ -373,7 +373,7 @@ def cap_return(prm, p_tr, J_tr, H_n, mu, kappa, scale, row, settings):
     failed = (0.0, 0.0, kappa, (0.0, 0.0, 0.0, 0.0), False)
     if not cap_admissible(prm, mu, kappa):
         return failed
-    g, jac, _ = cap_equations(prm, p_tr, J_tr, H_n, mu, kappa)
+    g, jac, stress = cap_equations(prm, p_tr, J_tr, H_n, mu, kappa)
     converged = False
     for _ in range(settings[0]):
         norm = cap_norm(g, scale, row)
@@ -385,10 +385,10 @@ def cap_return(prm, p_tr, J_tr, H_n, mu, kappa, scale, row, settings):
         for _ in range(settings[1]):
             mu_t, kappa_t = mu + step * d_mu, kappa + step * d_k
             if cap_admissible(prm, mu_t, kappa_t):
-                g_t, jac_t, _ = cap_equations(prm, p_tr, J_tr, H_n, mu_t, kappa_t)
+                g_t, jac_t, stress_t = cap_equations(prm, p_tr, J_tr, H_n, mu_t, kappa_t)
                 merit_t = norm_merit(g_t, scale, row)
                 if np.isfinite(merit_t) and merit_t <= (1.0 - 1e-4 * step) * merit:
-                    mu, kappa, g, jac, moved = mu_t, kappa_t, g_t, jac_t, True
+                    mu, kappa, g, jac, stress, moved = mu_t, kappa_t, g_t, jac_t, stress_t, True
                     break
             step *= 0.5
         if not moved:
@@ -399,12 +399,12 @@ def cap_return(prm, p_tr, J_tr, H_n, mu, kappa, scale, row, settings):
     # Polish with one more full step.
     d_mu, d_k = cap_solve(jac, -g[0], -g[1])
     if cap_admissible(prm, mu + d_mu, kappa + d_k):
-        g_t, jac_t, _ = cap_equations(prm, p_tr, J_tr, H_n, mu + d_mu, kappa + d_k)
+        g_t, jac_t, stress_t = cap_equations(prm, p_tr, J_tr, H_n, mu + d_mu, kappa + d_k)
         norm_t = cap_norm(g_t, scale, row)
         if np.isfinite(norm_t) and norm_t <= cap_norm(g, scale, row):
-            mu, kappa, jac = mu + d_mu, kappa + d_k, jac_t
+            mu, kappa, g, jac, stress = mu + d_mu, kappa + d_k, g_t, jac_t, stress_t
     K, G, R = prm[K_], prm[G_], prm[CAP_R]
-    g, _, (a, J, rho, c) = cap_equations(prm, p_tr, J_tr, H_n, mu, kappa)
+    a, J, rho, c = stress
     # a root with dgamma >= 0 on the cap's half of the ellipse (3p >= L), on it to ON_CAP of
     # its height: the tolerance scaled by the trial's stress is loose where the trial is
     # far out (a shear of 1e15 G put a point 1e5 times above a cap 5.6 psi high)
