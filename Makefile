@@ -51,11 +51,13 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet --no-build-isolation -c $(VENV)/constraints.txt -e ".[test]"
 	touch $@
 
-# the constitutive kernels, compiled by numba into its disk cache once (not at a run's start);
-# afresh: numba's cache knows each function's source, not the flags of models/jit.py
+# the constitutive kernels and the assembler's loops, compiled by numba into its disk cache
+# once (not at a run's start); afresh: numba's cache knows each function's source, not the
+# flags of models/jit.py
 $(KERNELS): $(STAMP) $(wildcard soilbin/models/*.py) soilbin/solver/assembly.py
 	rm -f soilbin/models/__pycache__/*.nb[ic] soilbin/solver/__pycache__/*.nb[ic]
 	$(PY) -m soilbin.models
+	$(PY) -m soilbin.solver
 	touch $@
 
 clean:

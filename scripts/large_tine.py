@@ -67,10 +67,10 @@ def stiffen_apex(alpha):
     the Newton matrix singular (docs/performance.md, *The large tine*)."""
     integrate = ModifiedCap.integrate
 
-    def stiffened(self, deps, state, guess=None):
-        sigma, tangent, new_state = integrate(self, deps, state, guess)
+    def stiffened(self, deps, state, guess, tangent):
+        sigma, new_state = integrate(self, deps, state, guess, tangent)
         tangent[new_state["yield_state"] == APEX] += alpha * self.stiffness
-        return sigma, tangent, new_state
+        return sigma, new_state
 
     ModifiedCap.integrate = stiffened
 

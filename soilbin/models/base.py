@@ -124,18 +124,22 @@ class Model(Params, abc.ABC):
         none are tied."""
         return state
 
-    def update(self, deps, state, guess=None):
+    def update(self, deps, state, guess=None, tangent=None):
         """(sigma, C_tan, new_state) for the strain increment ``deps`` (n, 6) from
         the committed ``state``; neither input is modified. ``guess``, if given, is
         the new state of a nearby increment from the same ``state`` (the last Newton
         iterate's): an iterative return may start from it, and a tangent where the
         return mode changed may differ (the caps' vertices); the stress and history
-        do not depend on it beyond the return's tolerance.
+        do not depend on it beyond the return's tolerance. ``tangent``, if given, is the
+        C-contiguous (n, 6, 6) array C_tan is written into (the quadrature Function's
+        values: no array of 36 numbers a point allocated and copied each iterate).
 
         Raises ReturnMapError when the result is not finite at some point.
         """
+        if tangent is None:
+            tangent = np.empty((len(deps), 6, 6))
         with np.errstate(all="ignore"):   # a non-finite result is reported below
-            sigma, tangent, new_state = self.integrate(np.asarray(deps, dtype=float), state, guess)
+            sigma, new_state = self.integrate(np.asarray(deps, dtype=float), state, guess, tangent)
         failed = count_nonfinite(sigma, tangent.reshape(len(tangent), 36))
         if failed:
             raise ReturnMapError(f"{type(self).__name__}: local stress update failed "
@@ -148,5 +152,6 @@ class Model(Params, abc.ABC):
         raise NotImplementedError(f"{cls.__name__} declares no conformance samples")
 
     @abc.abstractmethod
-    def integrate(self, deps, state, guess=None):
-        """The model's own update, as :meth:`update` but unchecked."""
+    def integrate(self, deps, state, guess, tangent):
+        """The model's own update, as :meth:`update` but unchecked, C_tan written into
+        ``tangent`` (n, 6, 6): returns (sigma, new_state)."""

@@ -751,21 +751,21 @@ class CapModel(IsotropicElasticity):
         X = np.maximum(state["cap_X"], self.L_min)
         return {**state, "cap_X": X, "cap_L": np.maximum(self.kappa(X), self.L_min)}
 
-    def integrate(self, deps, state, guess=None):
+    def integrate(self, deps, state, guess, tangent):
         m = len(deps)
         guess = state if guess is None else guess
         last = guess["yield_state"] if guess is not state else np.full(m, ELASTIC)
-        sigma, C = np.empty((m, 6)), np.empty((m, 6, 6))
+        sigma = np.empty((m, 6))
         L, X, compaction, eq, code = (np.empty(m) for _ in range(5))
         failed = cap_update(self.prm, np.ascontiguousarray(deps), state["stress"],
                             state["cap_L"], state["cap_X"], last, guess["stress"],
-                            guess["cap_L"], local_settings(), sigma, C, L, X, compaction, eq,
+                            guess["cap_L"], local_settings(), sigma, tangent, L, X, compaction, eq,
                             code, np.empty((3, 6)))
         check_converged(self, failed, m)
         new_state = {"stress": sigma, "cap_L": L, "cap_X": X,
                      "eps_p_vol": state["eps_p_vol"] - compaction,
                      "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": code}
-        return sigma, C, new_state
+        return sigma, new_state
 
 
 def cap_samples(table, cohesive):

@@ -274,11 +274,11 @@ class ConeModel(IsotropicElasticity):
         return (float(self.K), float(self.G), float(eta), float(k), float(self.tension_cutoff),
                 float(self.flow_slope))
 
-    def integrate(self, deps, state, guess=None):
+    def integrate(self, deps, state, guess, tangent):
         m = len(deps)
         deps, stress_n = np.ascontiguousarray(deps), np.ascontiguousarray(state["stress"])
         sigma = self.trial(deps, stress_n)   # the elastic predictor, returned in place
-        C, eps_p_eq, yield_state = np.empty((m, 6, 6)), np.empty(m), np.empty(m)
+        eps_p_eq, yield_state = np.empty(m), np.empty(m)
         cone_update(self.prm, deps, stress_n, np.ascontiguousarray(state["eps_p_eq"]), sigma,
-                    C, eps_p_eq, yield_state, np.empty((2, 6)))
-        return sigma, C, {"stress": sigma, "eps_p_eq": eps_p_eq, "yield_state": yield_state}
+                    tangent, eps_p_eq, yield_state, np.empty((2, 6)))
+        return sigma, {"stress": sigma, "eps_p_eq": eps_p_eq, "yield_state": yield_state}

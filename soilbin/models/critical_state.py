@@ -333,17 +333,17 @@ class CriticalStateModel(IsotropicElasticity):
         state["p_c"] = np.maximum(self.p_c0, self.ocr * through)
         return state
 
-    def integrate(self, deps, state, guess=None):
+    def integrate(self, deps, state, guess, tangent):
         m = len(deps)
-        sigma, C = np.empty((m, 6)), np.empty((m, 6, 6))
+        sigma = np.empty((m, 6))
         p_c, compaction, eq, code = (np.empty(m) for _ in range(4))
         failed = critical_state_update(self.prm, np.ascontiguousarray(deps), state["stress"],
-                                       state["p_c"], local_settings(), sigma, C, p_c,
+                                       state["p_c"], local_settings(), sigma, tangent, p_c,
                                        compaction, eq, code, np.empty((3, 6)))
         check_converged(self, failed, m)
         new_state = {"stress": sigma, "p_c": p_c, "eps_p_vol": state["eps_p_vol"] - compaction,
                      "eps_p_eq": state["eps_p_eq"] + eq, "yield_state": code}
-        return sigma, C, new_state
+        return sigma, new_state
 
 
 #: A lightly overconsolidated clay (kPa): M = 1.2, the conformance samples' parameters.

@@ -149,3 +149,9 @@ class BondedInterface(Params):
         traction, tangent = np.empty((len(jump), 3)), np.empty((len(jump), 3, 3))
         bonded_update(float(self.k_n), float(self.k_s), jump, normal, traction, tangent)
         return traction, tangent, state
+
+
+def exercise_interface(law):
+    """One traction update of ``law`` at one closed point: its kernels compiled (or loaded
+    from numba's cache)."""
+    law.traction_update(np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]), law.initial_state(1))

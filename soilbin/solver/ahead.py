@@ -18,7 +18,8 @@ The kernels are compiled by calling them as the run will: one update of one poin
 region's model from its initial state with its tangent's symmetry check and its plastic
 work, one traction update of the tool's interface. numba's compiler lock makes a main
 thread that calls a kernel meanwhile wait for it rather than compile it twice. The
-assembler's loops (:mod:`.assembly`) compile on the main thread.
+assembler's loops (:mod:`.assembly`) are not among them: ``make setup`` compiles them
+(:func:`~.assembly.compile_loops`), and where it has not, the first assembly does.
 """
 import contextlib
 import threading
@@ -26,6 +27,7 @@ import threading
 import numpy as np
 
 from ..models.base import exercise
+from ..models.mohr_coulomb_interface import exercise_interface
 
 
 def compile_model(model):
@@ -34,18 +36,12 @@ def compile_model(model):
     exercise(model, np.zeros((1, 6)), model.initial_state(1), model.initial_state(1))
 
 
-def compile_interface(interface):
-    """Compile the interface law's kernels: one traction update of one closed point."""
-    interface.traction_update(np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]),
-                              interface.initial_state(1))
-
-
 def compile_run_kernels(models, interface=None):
     """Compile the kernels that a run of ``models`` and ``interface`` (or None) calls."""
     for model in models:
         compile_model(model)
     if interface is not None:
-        compile_interface(interface)
+        exercise_interface(interface)
 
 
 @contextlib.contextmanager

@@ -101,6 +101,19 @@ def nonzero_pattern(element_dofs, row_items, row_offsets, seen, position_of, pos
     return count
 
 
+def compile_loops():
+    """The two loops compiled (or loaded from numba's cache) for the argument types an
+    assembly passes them, on empty arrays: ``python -m soilbin.solver`` (``make setup``), so
+    that a first run does not wait for numba."""
+    pairs, dofs, index = np.zeros((0, 2), np.int32), np.zeros((0, 1), np.int32), np.zeros(0, np.int32)
+    never_called = _TABULATE(lambda *pointers: None)
+    add_element_matrices(never_called, pairs, dofs, np.zeros((0, 1)), np.zeros(0),
+                         np.zeros((0, 3)), dofs, np.zeros(1, np.uint8), np.zeros(0, np.bool_),
+                         index, np.zeros((1, 3)), np.zeros((1, 1)), np.zeros(0))
+    none = np.zeros(0, dtype=PETSc.IntType)
+    nonzero_pattern(dofs, index, np.zeros(1, np.int64), index, index, index, none, none)
+
+
 class ElementAssembler:
     """Assembles the bilinear form ``form`` (on ``space``, Dirichlet conditions ``bcs``)
     into the matrix ``A`` made for it by ``dolfinx.fem.petsc.create_matrix``, whose

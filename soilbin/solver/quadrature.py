@@ -169,12 +169,17 @@ class MaterialPoints:
             failure = ""
             try:
                 for name, part in self._parts.items():
+                    # a region's points in one range: its tangent written in place
+                    into = (self._tangent[part]
+                            if isinstance(part, slice) and not self._tangent_frozen else None)
                     sigma, tangent, state = self.models[name].update(
-                        deps[part], self.committed[name], guess=self.trial[name])
+                        deps[part], self.committed[name], guess=self.trial[name], tangent=into)
                     self._stress[part] = sigma
                     if not self._tangent_frozen:
-                        self._tangent[part] = (tangent + self._floor[name] if name in self._floor
-                                               else tangent)
+                        if into is None:
+                            self._tangent[part] = tangent
+                        if name in self._floor:
+                            self._tangent[part] += self._floor[name]
                     self.trial[name] = state
             except ReturnMapError as err:
                 failure = str(err)
