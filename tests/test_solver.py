@@ -218,3 +218,23 @@ def test_regions_of_interleaved_cells_update_as_one_region():
     assert np.any(one.trial[name]["yield_state"] > 0.0)   # some points returned
     assert np.array_equal(one._stress, two._stress)
     assert np.array_equal(one._tangent, two._tangent)
+
+
+@pytest.mark.parametrize("scene, element", [("strip-footing-von-mises", "quad4-bbar"),
+                                            ("strip-footing-von-mises", "tri6"),
+                                            ("block-drucker-prager", "hex8-bbar"),
+                                            ("block-drucker-prager", "tet10-bbar")])
+def test_the_strain_increment_is_the_difference_evaluated_at_once_to_the_bit(scene, element):
+    """ε̄(w) − ε̄(w_n) at the points with ε̄(w_n) evaluated once a step is FFCx's evaluation of
+    the difference, to the bit, and follows w_n when it changes."""
+    from dolfinx import fem
+    problem = make_problem(scene, f"analysis.element={element}")
+    points, (strain, strain_n) = problem.points, problem.kinematics.strain_increment()
+    difference = fem.Expression(strain - strain_n, points._points)
+    rng = np.random.default_rng(5)
+    w, w_n = problem.w.x.array, problem.w_committed.x.array
+    for _ in range(2):   # a step's two iterates, then the next step's
+        w_n[:] = 1e-3 * rng.standard_normal(len(w_n))
+        for _ in range(2):
+            w[:] = w_n + 1e-4 * rng.standard_normal(len(w))
+            assert np.array_equal(points.strain_increment(), points.evaluate(difference))

@@ -51,8 +51,10 @@ class SmallStrain(_Extrapolated):
         self._p1 = None
 
     def strain_increment(self):
-        return (ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w))
-                - ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w_committed)))
+        """(ε̄(w), ε̄(w_n)), whose difference the models integrate (the second evaluated once
+        a step: :class:`~soilbin.solver.quadrature.MaterialPoints`)."""
+        return (ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w)),
+                ufl_mandel(virtual_work.enhanced_strain(self._disc, self._w_committed)))
 
     def internal_force(self, points, v):
         return virtual_work.internal_force(self._disc, points.stress, self._w, v)
@@ -107,7 +109,8 @@ class UpdatedLagrangian(_Extrapolated):
         self._rotation = None
 
     def strain_increment(self):
-        return ufl_mandel(updated_lagrangian.model_strain(self._disc, self._w))
+        """(the increment of the models' strain since Ω_n, None): nothing to subtract."""
+        return ufl_mandel(updated_lagrangian.model_strain(self._disc, self._w)), None
 
     def internal_force(self, points, v):
         return updated_lagrangian.internal_force(self._disc, points, self._w, v)

@@ -48,8 +48,11 @@ class MaterialPoints:
 
     def __init__(self, disc, w, w_committed, strain_increment, region_cells, models, keep_strain=False,
                  initial_stress=None, tangent_floor=0.0):
-        """``strain_increment``: UFL Mandel vector of the strain increment the models
-        integrate; ``region_cells``: region name -> local cell indices; ``models``:
+        """``strain_increment``: (ε, ε_n), UFL Mandel vectors whose difference is the strain
+        increment the models integrate; ε_n, a strain of the committed state (None: ε is the
+        increment itself), is evaluated again only where ``w_committed`` changed (half the
+        work of evaluating the difference at every iterate, and the same numbers to the
+        bit: FFCx evaluates a difference as ε + (−1) ε_n); ``region_cells``: region name -> local cell indices; ``models``:
         region name -> model; ``keep_strain``: also hold that increment at the points
         in the Function ``strain`` (the updated Lagrangian forms need it);
         ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3); ``tangent_floor``:
@@ -70,7 +73,10 @@ class MaterialPoints:
                        if keep_strain else None)
         self._w, self._w_committed = w, w_committed
         self._comm = mesh.comm
-        self._deps = fem.Expression(strain_increment, points)
+        strain, strain_n = strain_increment
+        self._strain = fem.Expression(strain, points)
+        self._strain_n = None if strain_n is None else fem.Expression(strain_n, points)
+        self._strain_n_values = self._strain_n_of = None   # ε_n at the points, of which w_n
         self._points = points
 
         covered = np.concatenate([np.asarray(c) for c in region_cells.values()])
@@ -142,7 +148,15 @@ class MaterialPoints:
 
     def strain_increment(self):
         """The strain increment at every local point, (n_points, 6), for the current iterate."""
-        return self.evaluate(self._deps)
+        strain = self.evaluate(self._strain)
+        if self._strain_n is None:
+            return strain
+        committed = self._w_committed.x.array
+        if self._strain_n_of is None or not np.array_equal(self._strain_n_of, committed):
+            self._strain_n_values = self.evaluate(self._strain_n)
+            self._strain_n_of = committed.copy()
+        strain -= self._strain_n_values
+        return strain
 
     def update(self):
         """One constitutive update at the current iterate: σ, C_tan and trial history;
