@@ -105,7 +105,8 @@ def compile_loops():
     """The two loops compiled (or loaded from numba's cache) for the argument types an
     assembly passes them, on empty arrays: ``python -m soilbin.solver`` (``make setup``), so
     that a first run does not wait for numba."""
-    pairs, dofs, index = np.zeros((0, 2), np.int32), np.zeros((0, 1), np.int32), np.zeros(0, np.int32)
+    pairs, dofs = np.zeros((0, 2), np.int32), np.zeros((0, 1), np.int32)
+    index = np.zeros(0, np.int32)
     never_called = _TABULATE(lambda *pointers: None)
     add_element_matrices(never_called, pairs, dofs, np.zeros((0, 1)), np.zeros(0),
                          np.zeros((0, 3)), dofs, np.zeros(1, np.uint8), np.zeros(0, np.bool_),

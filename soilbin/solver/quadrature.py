@@ -52,10 +52,10 @@ class MaterialPoints:
         increment the models integrate; ε_n, a strain of the committed state (None: ε is the
         increment itself), is evaluated again only where ``w_committed`` changed (half the
         work of evaluating the difference at every iterate, and the same numbers to the
-        bit: FFCx evaluates a difference as ε + (−1) ε_n); ``region_cells``: region name -> local cell indices; ``models``:
-        region name -> model; ``keep_strain``: also hold that increment at the points
-        in the Function ``strain`` (the updated Lagrangian forms need it);
-        ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3); ``tangent_floor``:
+        bit: FFCx evaluates a difference as ε + (−1) ε_n); ``region_cells``: region name ->
+        local cell indices; ``models``: region name -> model; ``keep_strain``: also hold that
+        increment at the points in the Function ``strain`` (the updated Lagrangian forms need
+        it); ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3); ``tangent_floor``:
         the fraction of each nonlinear model's elastic stiffness added to its tangent."""
         mesh = disc.mesh
         degree = disc.element.quadrature_degree
@@ -76,7 +76,7 @@ class MaterialPoints:
         strain, strain_n = strain_increment
         self._strain = fem.Expression(strain, points)
         self._strain_n = None if strain_n is None else fem.Expression(strain_n, points)
-        self._strain_n_values = self._strain_n_of = None   # ε_n at the points, of which w_n
+        self._strain_n_values = self._strain_n_of = None   # ε_n at the points, and its w_n
         self._points = points
 
         covered = np.concatenate([np.asarray(c) for c in region_cells.values()])
