@@ -50,9 +50,9 @@ class MaterialPoints:
                  initial_stress=None, tangent_floor=0.0):
         """``strain_increment``: (ε, ε_n), UFL Mandel vectors whose difference is the strain
         increment the models integrate; ε_n, a strain of the committed state (None: ε is the
-        increment itself), is evaluated again only where ``w_committed`` changed (half the
-        work of evaluating the difference at every iterate, and the same numbers to the
-        bit: FFCx evaluates a difference as ε + (−1) ε_n); ``region_cells``: region name ->
+        increment itself), is evaluated again only where ``w_committed`` changed (one strain
+        at every iterate instead of two, and the same numbers to the bit: FFCx evaluates a
+        difference as ε + (−1) ε_n); ``region_cells``: region name ->
         local cell indices; ``models``: region name -> model; ``keep_strain``: also hold that
         increment at the points in the Function ``strain`` (the updated Lagrangian forms need
         it); ``initial_stress(x)``: the stress (n, 6) at the points x (n, 3); ``tangent_floor``:
