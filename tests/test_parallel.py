@@ -101,10 +101,10 @@ problem = make_problem("strip-footing-von-mises", "mesh.edge_size=0.08", "loadin
 name, model = next(iter(problem.points.models.items()))
 update = model.update
 
-def failing(deps, state, guess=None):
+def failing(deps, state, guess=None, tangent=None):
     if MPI.COMM_WORLD.rank == 0:
         raise ReturnMapError("forced on rank 0")
-    return update(deps, state, guess=guess)
+    return update(deps, state, guess=guess, tangent=tangent)
 
 object.__setattr__(model, "update", failing)
 problem.set_load_factor(0.25)
