@@ -19,7 +19,9 @@ transferred stress outside its yield surface back to it (where it fails, the sam
 its integral of the equivalent plastic strain and its plastic work before and after the
 transfer.
 """
+import contextlib
 import dataclasses
+import math
 import time
 from pathlib import Path
 
@@ -61,7 +63,8 @@ class RemeshError(RuntimeError):
 class RemeshReport:
     """What one remesh did (``remeshes.csv``): after ``step``, the cells before and after, the
     equilibrium residual (of the run's force scale) after the transfer and after the
-    re-equilibration with its Newton iterations, the driven force before and after, the
+    re-equilibration with its Newton iterations, the driven force before, right after the
+    transfer (at the transferred state's first residual) and after the re-equilibration, the
     relative change of the soil's volume, of its integral of the equivalent plastic strain and
     of its plastic work (:data:`~soilbin.solver.quadrature.PLASTIC_WORK`) by the transfer, the
     least scaled Jacobian before and after, and the seconds spent: meshing (the outline
@@ -75,6 +78,7 @@ class RemeshReport:
     residual_equilibrated: float
     newton_iterations: int
     force_before: float
+    force_transferred: float
     force_after: float
     volume_change: float
     plastic_strain_change: float
@@ -143,11 +147,12 @@ class Remeshing:
         transferred = soil_integrals(new)
         transfer_s = time.perf_counter() - start - mesh_s
         new.set_load_factor(record.load_factor)
-        try:
-            result = _equilibrated(new)
-        except ConvergenceError as err:
-            raise RemeshError(f"after remeshing at step {record.step} the soil did not come back "
-                              f"to equilibrium at the same load ({err})") from None
+        with _first_force(new) as forces:
+            try:
+                result = _equilibrated(new)
+            except ConvergenceError as err:
+                raise RemeshError(f"after remeshing at step {record.step} the soil did not come "
+                                  f"back to equilibrium at the same load ({err})") from None
         new.commit()
         seen = new.observe()
         scale = new.newton.force_scale or 1.0
@@ -158,6 +163,7 @@ class Remeshing:
             residual_equilibrated=result.residuals[-1] / scale,
             newton_iterations=result.iterations,
             force_before=record.force, force_after=seen.force,
+            force_transferred=forces[0] if forces else math.nan,
             volume_change=transferred[0] / before[0] - 1.0,
             plastic_strain_change=_change(transferred[1], before[1]),
             plastic_work_change=_change(transferred[2], before[2]),
@@ -264,6 +270,25 @@ class Remeshing:
                        if "built_corners" in state else None)
         self._built_cells = None
         self.mesh_file, self.layout = mesh_file, layout
+
+
+@contextlib.contextmanager
+def _first_force(problem):
+    """A list that holds, after the block, the driven force at the first residual Newton
+    evaluates in it (if any): the state's before any correction (collective)."""
+    forces, chained = [], problem.newton.on_iterate
+
+    def on_iterate(iteration, residual, target):
+        if not forces:
+            forces.append(problem.drive.observe().force)
+        if chained is not None:
+            chained(iteration, residual, target)
+
+    problem.newton.on_iterate = on_iterate
+    try:
+        yield forces
+    finally:
+        problem.newton.on_iterate = chained
 
 
 def _equilibrated(problem):
