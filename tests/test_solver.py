@@ -225,8 +225,8 @@ def test_regions_of_interleaved_cells_update_as_one_region():
                                             ("block-drucker-prager", "hex8-bbar"),
                                             ("block-drucker-prager", "tet10-bbar")])
 def test_the_strain_increment_is_the_difference_evaluated_at_once_to_the_bit(scene, element):
-    """ε̄(w) − ε̄(w_n) at the points with ε̄(w_n) evaluated once a step is FFCx's evaluation of
-    the difference, to the bit, and follows w_n when it changes."""
+    """ε̄(w) − ε̄(w_n) at the points, ε̄(w_n) evaluated once a step, is FFCx's evaluation of the
+    difference to the bit, and follows w_n when it changes."""
     from dolfinx import fem
     problem = make_problem(scene, f"analysis.element={element}")
     points, (strain, strain_n) = problem.points, problem.kinematics.strain_increment()
