@@ -5,8 +5,9 @@ Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each 
 summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
 docs/chapter8.md (--page) two tables: per element and mesh the draft at each inch of travel,
 the lift at the end and the draft over the last sixth of the travel (mean, spread and
-slope); and what the travel cost (cells, remeshes, steps, Newton iterations, wall time, a
-remesh against a Newton iteration, and the plastic work's change by each transfer). A case
+slope); and what the travel cost (cells, remeshes and how many of them were smoothed, steps,
+Newton iterations, wall time, a remesh against a Newton iteration, the plastic work's change by
+each transfer, and the draft a fresh and a smoothed mesh took off). A case
 that failed (a remesh that could not be made) or was interrupted shows how far it went.
 Copies the study's figures into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
@@ -51,10 +52,11 @@ def drafts(results, scene):
 
 def costs(results, scene):
     lines = ["| element | element size [in] | cells at the start → the end | unknowns at the end | "
-             "remeshes | steps (cuts) | Newton (failed) | wall time [min] | wall time per "
-             "Newton iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] | "
-             "the plastic work's change by a transfer |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "remeshes (smoothed) | steps (cuts) | Newton (failed) | wall time [min] | wall time "
+             "per Newton iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] "
+             "| the plastic work's change by a transfer | draft lost at a fresh mesh / a smoothed "
+             "one |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for case, summary, _, remeshed in results:
         iterations = summary["newton_iterations"] + summary["failed_newton_iterations"]
         per_iteration = summary["wall_s"] / iterations
@@ -67,14 +69,25 @@ def costs(results, scene):
             equilibrium = f"{min(settled):.0f}–{max(settled):.0f}"
             work = [100 * r["plastic_work_change"] for r in remeshed]
             work = f"{min(work):+.1f}% to {max(work):+.1f}%"
+            lost = " / ".join(_lost([r for r in remeshed if r["smoothed"] == kept])
+                              for kept in (0, 1))
         else:
-            remesh = equilibrium = work = "–"
+            remesh = equilibrium = work = lost = "–"
+        smoothed = sum(int(r["smoothed"]) for r in remeshed)
         lines.append(f"| {mesh_of(case, scene)} | {first} → {summary['n_cells']} | "
-                     f"{summary['n_dofs']} | {len(remeshed)} | {summary['n_steps']} "
+                     f"{summary['n_dofs']} | {len(remeshed)} ({smoothed}) | {summary['n_steps']} "
                      f"({summary['cuts']}) | {summary['newton_iterations']} "
                      f"({summary['failed_newton_iterations']}) | {summary['wall_s'] / 60:.0f} | "
-                     f"{per_iteration:.2f} | {remesh} | {equilibrium} | {work} |")
+                     f"{per_iteration:.2f} | {remesh} | {equilibrium} | {work} | {lost} |")
     return "\n".join(lines)
+
+
+def _lost(remeshed):
+    """The range of the draft a remesh took off, in percent of the draft before it."""
+    if not remeshed:
+        return "–"
+    lost = [100 * (1 - r["force_after"] / r["force_before"]) for r in remeshed]
+    return f"{min(lost):.1f}–{max(lost):.1f}%"
 
 
 def main():

@@ -260,7 +260,8 @@ def _progress(record):
 
 
 def _remesh_progress(report):
-    print(f"  remeshed after step {report.step}: {report.cells_before} -> {report.cells_after} "
+    how = "smoothed" if report.smoothed else "remeshed"
+    print(f"  {how} after step {report.step}: {report.cells_before} -> {report.cells_after} "
           f"cells, quality {report.quality_before:.3g} -> {report.quality_after:.3g}, force "
           f"{report.force_before:.5g} -> {report.force_after:.5g} ({report.newton_iterations} "
           f"Newton), {report.wall_s:.2f} s", file=sys.stderr, flush=True)

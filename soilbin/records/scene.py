@@ -291,6 +291,11 @@ class Remesh(Params):
                                    "(mesh_quality in curve.csv) is below this (0: never)")
     every: int = param(0, lo=0, doc="remesh after every this many converged steps as well "
                                     "(0: only by min_quality)")
+    smooth_first: bool = param(True, doc="a three-dimensional soil below min_quality keeps "
+                                         "its cells, their nodes moved, where that lifts its "
+                                         "least scaled Jacobian to 1.15 min_quality (the "
+                                         "transfer then loses far less force); else it is "
+                                         "meshed afresh")
 
     @property
     def active(self):

@@ -39,6 +39,8 @@ CREASE = math.radians(40.0)
 
 #: gmsh's surface algorithms for the patches of a 3D remesh, in the order tried (module doc).
 DELAUNAY, MESH_ADAPT = 5, 1
+#: gmsh's element types of the 3-node triangle and the 4-node tetrahedron.
+TRIANGLE, TETRAHEDRON = 2, 4
 
 #: The least scaled Jacobian a Delaunay remesh must pass whatever the scene's min_quality: on
 #: the footing's thin slab (remeshed by count) it once left a sliver of 7e-6, around which
@@ -115,6 +117,31 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
         check_cells(RuntimeError, "the remesher made", 3, True)
         _write(path)
         return regions, dict(boundaries)
+    return distribute(comm, "remesh", model, dimension=3)
+
+
+def mesh_cells(comm, points, cells, triangles, tags, regions, boundaries, path):
+    """The TaggedMesh of the tetrahedra ``cells`` (m, 4) on the ``points`` (n, 3), with the
+    boundary ``triangles`` (k, 3) in the facet groups ``tags`` (k,) (rank 0; None elsewhere):
+    an old mesh with its nodes moved (:mod:`.smoothing`), distributed and written to the gmsh
+    file ``path``; ``regions``, ``boundaries`` as :func:`mesh_outline`'s."""
+    def model():
+        gmsh.model.add("smoothed")
+        volume = gmsh.model.addDiscreteEntity(3)
+        gmsh.model.mesh.addNodes(3, volume, np.arange(1, len(points) + 1), points.ravel())
+        gmsh.model.mesh.addElementsByType(volume, TETRAHEDRON, [], cells.ravel() + 1)
+        (name, region), = regions.items()
+        gmsh.model.addPhysicalGroup(3, [volume], region)
+        gmsh.model.setPhysicalName(3, region, name)
+        for group, tag in boundaries.items():
+            if (tags == tag).any():
+                patch = gmsh.model.addDiscreteEntity(2)
+                gmsh.model.mesh.addElementsByType(patch, TRIANGLE, [],
+                                                  triangles[tags == tag].ravel() + 1)
+                gmsh.model.addPhysicalGroup(2, [patch], tag)
+                gmsh.model.setPhysicalName(2, tag, group)
+        _write(path)
+        return dict(regions), dict(boundaries)
     return distribute(comm, "remesh", model, dimension=3)
 
 

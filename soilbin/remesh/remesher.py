@@ -37,8 +37,9 @@ from ..problem import SoilProblem
 from ..problem.loads import start_mean_pressure
 from ..solver.newton import NewtonResult
 from ..solver.quadrature import PLASTIC_WORK, quadrature_space
-from .mesher import Sizes, mesh_outline, mesh_surface
+from .mesher import Sizes, mesh_cells, mesh_outline, mesh_surface
 from .outline import OutlineError, gather_outline, initial_sizes
+from .smoothing import smoothed
 from .surface import gather_surface
 from .transfer import OldCells, cell_simplices
 
@@ -53,6 +54,10 @@ RELEASE_STAGES = 4
 EQUILIBRIUM_FLOOR = 1e-2
 #: The run folder's folder of the meshes that remeshing made.
 MESHES = "meshes"
+#: A three-dimensional soil whose least quality fell below min_quality keeps its cells, its
+#: nodes moved (:mod:`.smoothing`), where that lifts the least quality to this many times
+#: min_quality (the fresh meshes of the tine's soil reach 1.1-2.2 times its 0.045).
+SMOOTHED = 1.15
 
 
 class RemeshError(RuntimeError):
@@ -67,9 +72,10 @@ class RemeshReport:
     transfer (at the transferred state's first residual) and after the re-equilibration, the
     relative change of the soil's volume, of its integral of the equivalent plastic strain and
     of its plastic work (:data:`~soilbin.solver.quadrature.PLASTIC_WORK`) by the transfer, the
-    least scaled Jacobian before and after, and the seconds spent: meshing (the outline
+    least scaled Jacobian before and after, the seconds spent: meshing (the outline
     gathered, gmsh, the mesh distributed), the new problem with its transferred state, the
-    re-equilibration, and all of it."""
+    re-equilibration, and all of it; and 1 where the old cells were kept, their nodes moved
+    (``remesh.smooth_first``), 0 where the soil was meshed afresh."""
     step: int
     load_factor: float
     cells_before: int
@@ -89,6 +95,7 @@ class RemeshReport:
     transfer_s: float
     equilibrium_s: float
     wall_s: float
+    smoothed: int
 
 
 class Remeshing:
@@ -141,7 +148,7 @@ class Remeshing:
         start = time.perf_counter()
         before = soil_integrals(problem)
         try:
-            new, mesh_s = self._transferred(problem, record.step)
+            new, mesh_s, kept = self._transferred(problem, record.step, self._smooths(record))
         except (OutlineError, RuntimeError) as err:
             raise RemeshError(f"remeshing after step {record.step} failed: {err}") from None
         transferred = soil_integrals(new)
@@ -171,15 +178,22 @@ class Remeshing:
             quality_after=seen.columns.get("mesh_quality", float("nan")),
             mesh_s=mesh_s, transfer_s=transfer_s,
             equilibrium_s=time.perf_counter() - start - mesh_s - transfer_s,
-            wall_s=time.perf_counter() - start)
+            wall_s=time.perf_counter() - start, smoothed=int(kept))
         self.reports.append(report)
         self._last = record.step
         self.count += 1
         return new
 
-    def _transferred(self, old, step):
-        """A new problem on a fresh mesh of ``old``'s deformed soil, with its state, and the
-        seconds the mesh took."""
+    def _smooths(self, record):
+        """Whether to try mending the mesh by moving its nodes before meshing afresh: a
+        three-dimensional soil whose quality fell below min_quality."""
+        return (self.settings.smooth_first
+                and record.columns.get("mesh_quality", 1.0) < self.settings.min_quality)
+
+    def _transferred(self, old, step, smooth):
+        """A new problem on a new mesh of ``old``'s deformed soil, with its state, the seconds
+        the mesh took and whether it is the old cells on moved nodes (tried where ``smooth``;
+        else a fresh mesh)."""
         start = time.perf_counter()
         comm, tagged, scene = old.comm, old.tagged, self.scene
         element = old.disc.element
@@ -189,15 +203,22 @@ class Remeshing:
         state = layout.gather_state(old.state())
         samples = layout.gather(layout.by_cell(POINTS, _point_coordinates(old)))
         contact = _contact_points(old)
-        sizes = None
+        sizes, kept = None, None
+        smooth = smooth and not planar
         if comm.rank == 0:
             boundary, sizes = self._mesher_input(state, boundary, element.simplex,
                                                  old.disc.dimension, _tool_shift(old))
+            if smooth:
+                kept = self._smoothed(state, boundary)
+        kept_cells = comm.bcast(kept is not None, root=0)
         mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
         groups = dict(tagged.regions), dict(tagged.boundaries)
         if planar:
             new_tagged = mesh_outline(comm, boundary, sizes, *groups, element.simplex,
                                       self.folder / mesh_file)
+        elif kept_cells:
+            new_tagged = mesh_cells(comm, *(kept or (None,) * 4), *groups,
+                                    self.folder / mesh_file)
         else:
             new_tagged = mesh_surface(comm, boundary, sizes, *groups, self.folder / mesh_file,
                                       self.settings.min_quality)
@@ -219,7 +240,26 @@ class Remeshing:
         new.points.settle_history()
         if element.mixed:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
-        return new, mesh_s
+        return new, mesh_s, kept_cells
+
+    def _smoothed(self, state, surface):
+        """(the nodes, the old cells and the boundary's triangles and tags on them) with the
+        nodes moved to mend the cells below :data:`SMOOTHED` min_quality (:mod:`.smoothing`),
+        or None where that does not lift them all there (rank 0; ``state``'s corners and the
+        ``surface`` on the same grid)."""
+        corners = state["kinematics/mesh_x"][1]
+        points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+        merged, of_surface = np.unique(np.concatenate([points, surface.points]), axis=0,
+                                       return_inverse=True)
+        if len(merged) != len(points):
+            raise RuntimeError("the soil's boundary is not on its cells' corners")
+        triangles = of_surface[len(points):][surface.triangles]
+        target = SMOOTHED * self.settings.min_quality
+        moved, least = smoothed(points, index.reshape(len(corners), -1), triangles,
+                                surface.tags, target)
+        if least < target:
+            return None
+        return moved, index.reshape(len(corners), -1), triangles, surface.tags
 
     def _mesher_input(self, state, boundary, simplices, d, tool_shift):
         """(the boundary: in 2D the outline sampled at the sizes, in 3D the surface; the

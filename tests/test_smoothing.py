@@ -1,0 +1,141 @@
+"""Mending a distorted tetrahedral mesh by moving its nodes before meshing it afresh
+(:mod:`soilbin.remesh.smoothing`, ``remesh.smooth_first``)."""
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from conftest import SCENES
+from soilbin.problem.mesh_quality import simplex_quality
+from soilbin.records.scene import load_scene
+from soilbin.remesh.mesher import mesh_cells
+from soilbin.remesh.remesher import SMOOTHED, Remeshing
+from soilbin.remesh.smoothing import on_triangles, smoothed
+from soilbin.remesh.surface import Surface
+
+#: A unit cube's six tetrahedra around its diagonal from corner 0 to corner 7 (corner k at
+#: the bits of k: x, y, z).
+KUHN = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]]
+
+
+def kuhn_cube():
+    """The unit cube cut into 2 x 2 x 2 cubes of six tetrahedra each: (nodes (27, 3), cells
+    (48, 4), boundary triangles (48, 3) turned outward, their tags: 1 + the cube's face,
+    xmin .. zmax)."""
+    unit = np.array([[k & 1, (k >> 1) & 1, (k >> 2) & 1] for k in range(8)], dtype=float)
+    corners = np.concatenate([0.5 * (unit[KUHN] + [i, j, k])
+                              for i in range(2) for j in range(2) for k in range(2)])
+    points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+    cells = index.reshape(-1, 4)
+    faces = np.sort(cells[:, [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]].reshape(-1, 3), axis=1)
+    unique, count = np.unique(faces, axis=0, return_counts=True)
+    triangles = unique[count == 1]
+    centre = points[triangles].mean(axis=1)
+    axis = np.argmin(np.minimum(centre, 1.0 - centre), axis=1)
+    high = centre[np.arange(len(centre)), axis] > 0.5
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    outward = np.cross(b - a, c - a)[np.arange(len(centre)), axis] * np.where(high, 1, -1) > 0
+    triangles[~outward] = triangles[~outward][:, [0, 2, 1]]
+    return points, cells, triangles, 1 + 2 * axis + high
+
+
+def least_quality(points, cells, orientation):
+    return (orientation * simplex_quality(points[cells])).min()
+
+
+def volume(points, cells):
+    a, b, c, d = (points[cells[:, k]] for k in range(4))
+    return np.abs(np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)).sum() / 6.0
+
+
+def test_an_interior_node_pushed_toward_a_face_goes_back_to_the_centre():
+    """The cube's centre pushed to z = 0.1 flattens the tetrahedra below it to under a third
+    of the undistorted cube's least quality; smoothing lifts it to 0.8 of it, and the cube
+    keeps its shape and volume."""
+    points, cells, triangles, tags = kuhn_cube()
+    orientation = np.sign(simplex_quality(points[cells]))
+    best = least_quality(points, cells, orientation)
+    centre = np.flatnonzero((points == 0.5).all(axis=1))[0]
+    distorted = points.copy()
+    distorted[centre] = [0.5, 0.5, 0.1]
+    assert least_quality(distorted, cells, orientation) < 0.3 * best
+    moved, least = smoothed(distorted, cells, triangles, tags, 0.8 * best)
+    assert least >= 0.8 * best
+    assert least == pytest.approx(least_quality(moved, cells, orientation), rel=1e-14)
+    faces = np.unique(triangles)
+    assert (np.isin(moved[faces], [0.0, 1.0]).sum(axis=1) >= 1).all()   # still on a face
+    assert volume(moved, cells) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_a_node_in_a_flat_face_slides_in_it_and_the_edges_stay():
+    """The centre of the cube's face z = 0 pushed along it to y = 0.9: smoothing slides it
+    back within the face (z stays 0 to the bit), the cube's edges and corners stay, and
+    the cube's volume is unchanged."""
+    points, cells, triangles, tags = kuhn_cube()
+    orientation = np.sign(simplex_quality(points[cells]))
+    best = least_quality(points, cells, orientation)
+    face_centre = np.flatnonzero((points == [0.5, 0.5, 0.0]).all(axis=1))[0]
+    distorted = points.copy()
+    distorted[face_centre] = [0.5, 0.9, 0.0]
+    assert least_quality(distorted, cells, orientation) < 0.3 * best
+    moved, least = smoothed(distorted, cells, triangles, tags, 0.8 * best)
+    assert least >= 0.8 * best
+    assert moved[face_centre, 2] == 0.0
+    on_edges = (np.isin(points, [0.0, 1.0]).sum(axis=1) >= 2)   # two coordinates on a face
+    assert np.array_equal(moved[on_edges], points[on_edges])
+    assert volume(moved, cells) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_a_node_where_two_groups_meet_stays_even_if_its_cells_stay_bad():
+    """The middle of the cube's edge y = z = 0 pulled into the cube leaves its cells bad; two
+    groups meet there, so it stays (the soil's shape and its groups' borders are kept), and
+    the least quality is reported as it is."""
+    points, cells, triangles, tags = kuhn_cube()
+    orientation = np.sign(simplex_quality(points[cells]))
+    edge_middle = np.flatnonzero((points == [0.5, 0.0, 0.0]).all(axis=1))[0]
+    assert len(np.unique(tags[(triangles == edge_middle).any(axis=1)])) == 2
+    distorted = points.copy()
+    distorted[edge_middle] = [0.5, 0.45, 0.45]
+    moved, least = smoothed(distorted, cells, triangles, tags, 0.5)
+    assert np.array_equal(moved[edge_middle], distorted[edge_middle])
+    assert least < 0.5
+    assert least == pytest.approx(least_quality(moved, cells, orientation), rel=1e-14)
+
+
+def test_a_point_is_projected_onto_the_triangle_under_it():
+    triangles = np.array([[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+                          [[1.0, 0.0, 0.0], [1.0, 1.0, 1.0], [0.0, 1.0, 0.0]]])
+    assert np.array_equal(on_triangles(np.array([0.2, 0.3, 0.5]), triangles), [0.2, 0.3, 0.0])
+    assert on_triangles(np.array([2.0, 2.0, 0.0]), triangles[:1]) is None
+
+
+def test_a_remesh_below_min_quality_keeps_the_cells_where_smoothing_mends_them(tmp_path):
+    """The remesher's path (rank 0's gathered corners and surface): the distorted cube
+    mended to SMOOTHED min_quality, its cells and facets kept and distributed as a mesh with
+    the six facet groups; with min_quality above what moving nodes can reach, None (the soil
+    is meshed afresh)."""
+    points, cells, triangles, tags = kuhn_cube()
+    centre = np.flatnonzero((points == 0.5).all(axis=1))[0]
+    points[centre] = [0.5, 0.5, 0.1]
+    state = {"kinematics/mesh_x": (None, points[cells])}
+    surface = Surface.of(points[triangles], tags)
+    scene = load_scene(SCENES / "block-drucker-prager.toml",
+                       ["analysis.element=tet10", "analysis.large_deformation=true",
+                        "remesh.min_quality=0.3"])
+    moved, kept_cells, kept_triangles, kept_tags = Remeshing(scene, tmp_path)._smoothed(
+        state, surface)
+    assert np.array_equal(kept_cells, cells)             # the nodes numbered as they sort
+    assert moved[centre, 2] > 0.2 and volume(moved, cells) == pytest.approx(1.0, rel=1e-12)
+    orientation = np.sign(simplex_quality(points[cells]))
+    assert least_quality(moved, cells, orientation) >= SMOOTHED * 0.3
+    assert np.array_equal(np.sort(np.sort(kept_triangles, axis=1), axis=0),
+                          np.sort(np.sort(triangles, axis=1), axis=0))
+    boundaries = {f"face{k}": k for k in range(1, 7)}
+    tagged = mesh_cells(MPI.COMM_SELF, moved, kept_cells, kept_triangles, kept_tags,
+                        {"soil": 7}, boundaries, tmp_path / "smoothed.msh")
+    assert tagged.mesh.topology.index_map(3).size_local == 48
+    assert sorted(np.bincount(tagged.facet_tags.values)[1:].tolist()) == [8] * 6
+    assert (tmp_path / "smoothed.msh").exists()
+    strict = load_scene(SCENES / "block-drucker-prager.toml",
+                        ["analysis.element=tet10", "analysis.large_deformation=true",
+                         "remesh.min_quality=0.9"])
+    assert Remeshing(strict, tmp_path)._smoothed(state, surface) is None
