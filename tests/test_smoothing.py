@@ -7,7 +7,7 @@ from mpi4py import MPI
 from conftest import SCENES
 from soilbin.problem.mesh_quality import simplex_quality
 from soilbin.records.scene import load_scene
-from soilbin.remesh.mesher import mesh_cells
+from soilbin.remesh.mesher import mesh_cells, read_mesh
 from soilbin.remesh.remesher import SMOOTHED, Remeshing
 from soilbin.remesh.smoothing import on_triangles, smoothed
 from soilbin.remesh.surface import Surface
@@ -134,7 +134,11 @@ def test_a_remesh_below_min_quality_keeps_the_cells_where_smoothing_mends_them(t
                         {"soil": 7}, boundaries, tmp_path / "smoothed.msh")
     assert tagged.mesh.topology.index_map(3).size_local == 48
     assert sorted(np.bincount(tagged.facet_tags.values)[1:].tolist()) == [8] * 6
-    assert (tmp_path / "smoothed.msh").exists()
+    again = read_mesh(MPI.COMM_SELF, tmp_path / "smoothed.msh", {"soil": 7}, boundaries, 3)
+    assert np.array_equal(np.sort(again.mesh.geometry.x, axis=0),
+                          np.sort(tagged.mesh.geometry.x, axis=0))    # what --resume reads
+    assert np.array_equal(np.bincount(again.facet_tags.values),
+                          np.bincount(tagged.facet_tags.values))
     strict = load_scene(SCENES / "block-drucker-prager.toml",
                         ["analysis.element=tet10", "analysis.large_deformation=true",
                          "remesh.min_quality=0.9"])
