@@ -534,38 +534,20 @@ def test_a_remeshed_soil_against_a_rough_wall_keeps_its_contact(tmp_path):
 def the_same_mesh(monkeypatch):
     """Make the remesher "remesh" a three-dimensional soil onto its own mesh as it stands:
     the state's transfer alone, without a new discretisation."""
-    from soilbin.meshes.tagged import distribute
     from soilbin.remesh import remesher
+    from soilbin.remesh.mesher import mesh_cells
     old = {}
     transferred = remesher.Remeshing._transferred
 
-    def keeping_the_old_mesh(self, problem, step):
+    def keeping_the_old_mesh(self, problem, step, smooth):
         old["tagged"] = problem.tagged
-        return transferred(self, problem, step)
+        return transferred(self, problem, step, smooth)
 
     def same_mesh(comm, surface, sizes, regions, boundaries, path, min_quality):
-        tagged = old["tagged"]
-        mesh, facets = tagged.mesh, tagged.facet_tags
-        x, cells = mesh.geometry.x, mesh.geometry.dofmap.array.reshape(-1, 4)
+        mesh, facets = old["tagged"].mesh, old["tagged"].facet_tags
         triangles = entities_to_geometry(mesh._mesh, 2, facets.indices, False)[:, :3]
-
-        def model():
-            gmsh.model.add("same")
-            soil = gmsh.model.addDiscreteEntity(3)
-            gmsh.model.mesh.addNodes(3, soil, np.arange(1, len(x) + 1), x.ravel())
-            gmsh.model.mesh.addElementsByType(soil, 4, np.arange(1, len(cells) + 1),
-                                              (cells + 1).ravel())
-            gmsh.model.addPhysicalGroup(3, [soil], *regions.values())
-            first = len(cells) + 1
-            for tag in np.unique(facets.values):
-                mine = triangles[facets.values == tag] + 1
-                face = gmsh.model.addDiscreteEntity(2)
-                gmsh.model.mesh.addElementsByType(face, 2, np.arange(first, first + len(mine)),
-                                                  mine.ravel())
-                first += len(mine)
-                gmsh.model.addPhysicalGroup(2, [face], int(tag))
-            return regions, dict(boundaries)
-        return distribute(comm, "the same mesh", model, dimension=3)
+        return mesh_cells(comm, mesh.geometry.x, mesh.geometry.dofmap.array.reshape(-1, 4),
+                          triangles, facets.values, regions, boundaries, path)
     monkeypatch.setattr(remesher.Remeshing, "_transferred", keeping_the_old_mesh)
     monkeypatch.setattr(remesher, "mesh_surface", same_mesh)
 
