@@ -52,10 +52,10 @@ def drafts(results, scene):
 
 def costs(results, scene):
     lines = ["| element | element size [in] | cells at the start → the end | unknowns at the end | "
-             "remeshes (smoothed) | steps (cuts) | Newton (failed) | wall time [min] | wall time "
-             "per Newton iteration [s] | a remesh and its transfer [s] | its re-equilibration [s] "
-             "| the plastic work's change by a transfer | draft lost at a fresh mesh / a smoothed "
-             "one |",
+             "remeshes (smoothed) | steps (cuts) | Newton (failed) | wall time [min] | "
+             "wall time per Newton iteration [s] | a remesh and its transfer [s] | "
+             "its re-equilibration [s] | the plastic work's change by a transfer | "
+             "draft lost at a fresh mesh / a smoothed one |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for case, summary, _, remeshed in results:
         iterations = summary["newton_iterations"] + summary["failed_newton_iterations"]

@@ -249,17 +249,15 @@ class Remeshing:
         ``surface`` on the same grid)."""
         corners = state["kinematics/mesh_x"][1]
         points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+        cells = index.reshape(len(corners), -1)
         merged, of_surface = np.unique(np.concatenate([points, surface.points]), axis=0,
                                        return_inverse=True)
         if len(merged) != len(points):
             raise RuntimeError("the soil's boundary is not on its cells' corners")
         triangles = of_surface[len(points):][surface.triangles]
         target = SMOOTHED * self.settings.min_quality
-        moved, least = smoothed(points, index.reshape(len(corners), -1), triangles,
-                                surface.tags, target)
-        if least < target:
-            return None
-        return moved, index.reshape(len(corners), -1), triangles, surface.tags
+        moved, least = smoothed(points, cells, triangles, surface.tags, target)
+        return (moved, cells, triangles, surface.tags) if least >= target else None
 
     def _mesher_input(self, state, boundary, simplices, d, tool_shift):
         """(the boundary: in 2D the outline sampled at the sizes, in 3D the surface; the

@@ -1,20 +1,20 @@
 """The deformed soil's tetrahedra mended by moving their nodes, before meshing it afresh.
 
-A fresh mesh of the deformed soil takes 10-25% off the tine's draft at each remesh, and 2-8%
-off the force of an elastic soil (docs/chapter8.md): the stress moved onto other cells is not in
-their discrete equilibrium, and the re-equilibration relaxes it. The loss grows with how far
+A fresh mesh of the deformed soil takes 10-30% off the tine's draft at each remesh, and 2-8%
+off the force of an elastic soil (docs/chapter8.md): the stress moved onto other cells is not
+in their discrete equilibrium, and the re-equilibration relaxes it. The loss grows with how far
 the new cells are from the old: with the old mesh's interior nodes moved at random by a tenth
 of their shortest edge, the same elastic soil loses 0.2%. Where the few cells below the target
 can be mended by moving nodes, the remesher keeps the cells and moves the nodes
 (:func:`smoothed`), and the state moves a short way.
 
 Each sweep visits the movable nodes of the cells below the target, those of the worst cells
-first, and puts each
-where the least scaled Jacobian of its cells is highest among: toward the centroid of its
-neighbours by :data:`LAPLACIAN_STEPS` of the way (smart Laplacian smoothing, Freitag &
-Ollivier-Gooch 1997, "Tetrahedral mesh improvement using swapping and smoothing", IJNME 40,
-3979-4002), or, where none of those raises it, up the gradient of its worst cell's quality by
-:data:`GRADIENT_STEPS` of its shortest edge; it stays where nothing raises it. An interior node
+first, and puts each where the least scaled Jacobian of its cells is highest among: toward
+the centroid of its neighbours by :data:`LAPLACIAN_STEPS` of the way (smart Laplacian
+smoothing, Freitag & Ollivier-Gooch 1997, "Tetrahedral mesh improvement using swapping and
+smoothing", IJNME 40, 3979-4002), or, where none of those raises it, up the gradient of its
+worst cell's quality by :data:`GRADIENT_STEPS` of its shortest edge; it stays where nothing
+raises it. An interior node
 moves freely. A boundary node inside one facet group's patch (its boundary triangles all of
 one group, none folded more than :data:`SLIDE` from another) slides on its boundary triangles
 as they were before the sweeps (a move that leaves them is not taken), so that the soil keeps
