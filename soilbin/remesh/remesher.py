@@ -185,8 +185,9 @@ class Remeshing:
         return new
 
     def _smooths(self, record):
-        """Whether to try mending the mesh by moving its nodes before meshing afresh: a
-        three-dimensional soil whose quality fell below min_quality."""
+        """Whether to try mending the mesh by moving its nodes before meshing afresh: where
+        its quality fell below min_quality (:meth:`_transferred` tries it in three
+        dimensions only)."""
         return (self.settings.smooth_first
                 and record.columns.get("mesh_quality", 1.0) < self.settings.min_quality)
 

@@ -110,8 +110,9 @@ def _gradient(x, node, cell, quality, h):
 
 
 def on_triangles(p, triangles):
-    """The point ``p`` (3,) projected onto the plane of the nearest of the ``triangles`` (k, 3,
-    3) whose plane it projects inside of them; None if it projects inside none."""
+    """The point ``p`` (3,) projected onto the plane of one of the ``triangles`` (k, 3, 3):
+    of the nearest plane among those it projects into the triangle of; None if there is
+    none."""
     a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
     normal = np.cross(b - a, c - a)
     normal /= np.linalg.norm(normal, axis=1)[:, None]
@@ -127,10 +128,8 @@ def on_triangles(p, triangles):
 
 def _incidence(cells, n):
     """The cells around each of the ``n`` nodes: a list of arrays."""
-    order = np.argsort(cells.ravel(), kind="stable")
-    bounds = np.concatenate([[0], np.cumsum(np.bincount(cells.ravel(), minlength=n))])
-    per_cell = cells.shape[1]
-    return [order[bounds[k]:bounds[k + 1]] // per_cell for k in range(n)]
+    order = np.argsort(cells.ravel(), kind="stable") // cells.shape[1]
+    return np.split(order, np.cumsum(np.bincount(cells.ravel(), minlength=n))[:-1])
 
 
 def _sliding(x, triangles, tags):
