@@ -61,8 +61,8 @@ def test_an_interior_node_pushed_toward_a_face_goes_back_to_the_centre():
     distorted = points.copy()
     distorted[centre] = [0.5, 0.5, 0.1]
     assert least_quality(distorted, cells, orientation) < 0.3 * best
-    moved, kept, least = smoothed(distorted, cells, triangles, tags, 0.8 * best)
-    assert least >= 0.8 * best and np.array_equal(kept, cells)   # no swap needed
+    moved, least = smoothed(distorted, cells, triangles, tags, 0.8 * best)
+    assert least >= 0.8 * best
     assert least == pytest.approx(least_quality(moved, cells, orientation), rel=1e-14)
     faces = np.unique(triangles)
     assert (np.isin(moved[faces], [0.0, 1.0]).sum(axis=1) >= 1).all()   # still on a face
@@ -80,35 +80,28 @@ def test_a_node_in_a_flat_face_slides_in_it_and_the_edges_stay():
     distorted = points.copy()
     distorted[face_centre] = [0.5, 0.9, 0.0]
     assert least_quality(distorted, cells, orientation) < 0.3 * best
-    moved, kept, least = smoothed(distorted, cells, triangles, tags, 0.8 * best)
-    assert least >= 0.8 * best and np.array_equal(kept, cells)
+    moved, least = smoothed(distorted, cells, triangles, tags, 0.8 * best)
+    assert least >= 0.8 * best
     assert moved[face_centre, 2] == 0.0
     on_edges = (np.isin(points, [0.0, 1.0]).sum(axis=1) >= 2)   # two coordinates on a face
     assert np.array_equal(moved[on_edges], points[on_edges])
     assert volume(moved, cells) == pytest.approx(1.0, rel=1e-12)
 
 
-def test_a_node_where_two_groups_meet_stays_and_its_cells_are_swapped():
-    """The middle of the cube's edge y = z = 0 pulled into the cube leaves its cells bad
-    (0.036); two groups meet there, so it stays (the soil's shape and its groups' borders are
-    kept), and swapping faces and edges around it lifts the least quality to 0.33, short of
-    the target 0.5, which is reported as it is. The new cells fill the same volume and carry
-    every boundary triangle."""
+def test_a_node_where_two_groups_meet_stays_even_if_its_cells_stay_bad():
+    """The middle of the cube's edge y = z = 0 pulled into the cube leaves its cells bad; two
+    groups meet there, so it stays (the soil's shape and its groups' borders are kept), and
+    the least quality is reported as it is."""
     points, cells, triangles, tags = kuhn_cube()
     orientation = np.sign(simplex_quality(points[cells]))
     edge_middle = np.flatnonzero((points == [0.5, 0.0, 0.0]).all(axis=1))[0]
     assert len(np.unique(tags[(triangles == edge_middle).any(axis=1)])) == 2
     distorted = points.copy()
     distorted[edge_middle] = [0.5, 0.45, 0.45]
-    assert least_quality(distorted, cells, orientation) < 0.04
-    moved, kept, least = smoothed(distorted, cells, triangles, tags, 0.5)
+    moved, least = smoothed(distorted, cells, triangles, tags, 0.5)
     assert np.array_equal(moved[edge_middle], distorted[edge_middle])
-    assert 0.3 < least < 0.5
-    assert least == pytest.approx(np.abs(simplex_quality(moved[kept])).min(), rel=1e-14)
-    assert volume(moved, kept) == pytest.approx(volume(moved, cells), rel=1e-12)
-    faces = {tuple(sorted(cell[list(face)])) for cell in kept
-             for face in ((1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2))}
-    assert all(tuple(sorted(t)) in faces for t in triangles)
+    assert least < 0.5
+    assert least == pytest.approx(least_quality(moved, cells, orientation), rel=1e-14)
 
 
 def test_a_point_is_projected_onto_the_triangle_under_it():

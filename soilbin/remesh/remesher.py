@@ -245,9 +245,9 @@ class Remeshing:
 
     def _smoothed(self, state, surface):
         """(the nodes, the old cells and the boundary's triangles and tags on them) with the
-        nodes moved and a few cells swapped to mend the cells below :data:`SMOOTHED`
-        min_quality (:mod:`.smoothing`), or None where that does not lift them all there
-        (rank 0; ``state``'s corners and the ``surface`` on the same grid)."""
+        nodes moved to mend the cells below :data:`SMOOTHED` min_quality (:mod:`.smoothing`),
+        or None where that does not lift them all there (rank 0; ``state``'s corners and the
+        ``surface`` on the same grid)."""
         corners = state["kinematics/mesh_x"][1]
         points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
         cells = index.reshape(len(corners), -1)
@@ -257,7 +257,7 @@ class Remeshing:
             raise RuntimeError("the soil's boundary is not on its cells' corners")
         triangles = of_surface[len(points):][surface.triangles]
         target = SMOOTHED * self.settings.min_quality
-        moved, cells, least = smoothed(points, cells, triangles, surface.tags, target)
+        moved, least = smoothed(points, cells, triangles, surface.tags, target)
         return (moved, cells, triangles, surface.tags) if least >= target else None
 
     def _mesher_input(self, state, boundary, simplices, d, tool_shift):

@@ -1,13 +1,12 @@
-"""The deformed soil's tetrahedra mended by moving their nodes and swapping their faces and
-edges, before meshing it afresh.
+"""The deformed soil's tetrahedra mended by moving their nodes, before meshing it afresh.
 
 A fresh mesh of the deformed soil takes 10-30% off the tine's draft at each remesh, and 2-8%
 off the force of an elastic soil (docs/chapter8.md): the stress moved onto other cells is not
 in their discrete equilibrium, and the re-equilibration relaxes it. The loss grows with how far
 the new cells are from the old: with the old mesh's interior nodes moved at random by a tenth
 of their shortest edge, the same elastic soil loses 0.2%. Where the few cells below the target
-can be mended by moving nodes and reconnecting a few cells, the remesher keeps the rest of the
-cells and moves the nodes (:func:`smoothed`), and the state moves a short way.
+can be mended by moving nodes, the remesher keeps the cells and moves the nodes
+(:func:`smoothed`), and the state moves a short way.
 
 Each sweep visits the movable nodes of the cells below the target, those of the worst cells
 first, and puts each where the least scaled Jacobian of its cells is highest among: toward
@@ -19,58 +18,36 @@ raises it. An interior node
 moves freely. A boundary node inside one facet group's patch (its boundary triangles all of
 one group, none folded more than :data:`SLIDE` from another) slides on its boundary triangles
 as they were before the sweeps (a move that leaves them is not taken), so that the soil keeps
-its shape to a rounding of its ridges; the other boundary nodes (where groups meet, at sharper
-folds) stay. Where the sweeps leave cells below the target (most often a cell whose four
-nodes all stay), their interior faces and edges are swapped (:mod:`.swapping`) and the
-sweeps run again, as Freitag & Ollivier-Gooch alternate them.
+its shape; the other boundary nodes (where groups meet, at folds) stay.
 """
 import math
 
 import numpy as np
 
 from ..problem.mesh_quality import simplex_quality
-from .swapping import incidence, swapped
 
 #: Sweeps over the nodes of the cells below the target, at most.
 SWEEPS = 20
-#: Rounds of sweeps and swaps, at most.
-ROUNDS = 4
 #: The shares of the way to the neighbours' centroid a node is tried at.
 LAPLACIAN_STEPS = (1.0, 0.6, 0.3, 0.1)
 #: The moves up the worst cell's quality gradient tried, in shortest edges of the node.
 GRADIENT_STEPS = (0.3, 0.1, 0.03, 0.01)
 #: A boundary node slides where its boundary triangles fold by less than this between any two.
-SLIDE = math.radians(45.0)
+SLIDE = math.radians(20.0)
 
 
 def smoothed(points, cells, triangles, tags, target):
-    """(the ``points`` (n, 3) moved, the ``cells`` (m, 4) with some swapped, their least
-    scaled Jacobian): the nodes of the cells below ``target`` moved (module doc), and where
-    that leaves some below it, their faces and edges swapped (:mod:`.swapping`) and the nodes
-    moved again, at most :data:`ROUNDS` times; ``triangles`` (k, 3) and ``tags`` (k,) are the
-    boundary's facets and their groups, which stay. Each cell keeps its orientation."""
+    """(the ``points`` (n, 3) moved, the least scaled Jacobian of the ``cells`` (m, 4) then):
+    the nodes of the cells below ``target`` moved (module doc); ``triangles`` (k, 3) and
+    ``tags`` (k,) are the boundary's facets and their groups. Each cell keeps its orientation."""
     x = np.array(points, dtype=float)
+    orientation = np.sign(simplex_quality(x[cells]))
+    incident = _incidence(cells, len(x))
     umbrella = _sliding(x, triangles, tags)
     on_boundary = np.zeros(len(x), dtype=bool)
     on_boundary[triangles.ravel()] = True
     movable = ~on_boundary
     movable[list(umbrella)] = True
-    for _ in range(ROUNDS):
-        least = _sweeps(x, cells, movable, umbrella, target)
-        if least >= target:
-            break
-        cells, swaps = swapped(x, cells, target)
-        if not swaps:
-            break
-        least = np.abs(simplex_quality(x[cells])).min()
-    return x, cells, least
-
-
-def _sweeps(x, cells, movable, umbrella, target):
-    """Move the ``movable`` nodes of the cells below ``target`` in ``x``, in sweeps (module
-    doc); returns the cells' least quality then."""
-    orientation = np.sign(simplex_quality(x[cells]))
-    incident = incidence(cells, len(x))
 
     def quality(some):
         return orientation[some] * simplex_quality(x[cells[some]])
@@ -85,7 +62,7 @@ def _sweeps(x, cells, movable, umbrella, target):
                  for node in nodes]
         if not any(moved):
             break
-    return quality(slice(None)).min()
+    return x, quality(slice(None)).min()
 
 
 def _improve(x, node, around, cells, quality, umbrella):
@@ -149,12 +126,18 @@ def on_triangles(p, triangles):
     return q[inside][np.argmin(np.abs(height[inside]))]
 
 
+def _incidence(cells, n):
+    """The cells around each of the ``n`` nodes: a list of arrays."""
+    order = np.argsort(cells.ravel(), kind="stable") // cells.shape[1]
+    return np.split(order, np.cumsum(np.bincount(cells.ravel(), minlength=n))[:-1])
+
+
 def _sliding(x, triangles, tags):
     """The boundary nodes that may slide: node -> its boundary triangles' corners (j, 3, 3)."""
     a, b, c = (x[triangles[:, k]] for k in range(3))
     normal = np.cross(b - a, c - a)
     normal /= np.linalg.norm(normal, axis=1)[:, None]
-    around = incidence(triangles, len(x))
+    around = _incidence(triangles, len(x))
     umbrella = {}
     for node in np.unique(triangles):
         mine = around[node]
