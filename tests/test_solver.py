@@ -1,4 +1,6 @@
 """Newton's linear solvers, the condensed B-bar system, the early cut of diverging steps."""
+import re
+
 import numpy as np
 import pytest
 from petsc4py import PETSc
@@ -133,6 +135,25 @@ def test_a_diverging_step_is_cut_early():
     problem.roll_back()
     result = run_load_steps(problem, 1, 5, lambda r: None)   # cut until a step converges
     assert result.steps[0].cuts >= 1 and result.steps[0].failed_iterations >= failure.value.iterations
+
+
+def test_a_step_at_its_iteration_limit_says_how_far_its_residual_came_and_what_set_its_target():
+    """The whole settlement in one step with three iterations allowed: the failure names the
+    least residual, the target and the key that set it (rtol times the step's first
+    residual; with a larger atol, atol times the force scale)."""
+    pattern = (r"iteration limit reached\) after 3 iterations; the residual (\S+) at least "
+               r"against the target (\S+), (solver\.\w+) (\S+) x the (step's first residual|"
+               r"force scale) (\S+)$")
+    for atol, key in ((1e-10, "solver.rtol"), (1e-3, "solver.atol")):
+        problem = make_problem("strip-footing-von-mises", "loading.steps=1",
+                               "solver.max_iterations=3", "solver.line_search=cp",
+                               f"solver.atol={atol}")
+        problem.set_load_factor(1.0)
+        with pytest.raises(NewtonFailure) as failure:
+            problem.solve()
+        least, target, named, factor, _, base = re.search(pattern, str(failure.value)).groups()
+        assert named == key and float(least) > float(target)
+        assert float(target) == pytest.approx(float(factor) * float(base), rel=2e-3)
 
 
 def test_the_critical_point_line_search_stops_where_the_energy_is_stationary():

@@ -129,6 +129,7 @@ class NewtonSolver:
         self._on_equations = w.vector.duplicate()
         self._force_scale = 0.0
         self._carried = 0.0   # the largest force carried so far (:meth:`carry`)
+        self._first = 0.0     # the current step's first residual (:meth:`_converged`)
         self._symmetric_tangent = symmetric_tangent
         #: Called at every iterate with (iteration, residual norm, target), e.g. for progress.
         self.on_iterate = None
@@ -247,6 +248,7 @@ class NewtonSolver:
         ``first`` joins), ROUNDING of the force carried."""
         if first > 0.0 and len(residuals) == 1:
             self._force_scale = max(self._force_scale, first)
+        self._first = first
         target = max(self._opts.rtol * first, self._opts.atol * self._force_scale,
                      ROUNDING * self._carried)
         if self.on_iterate is not None:
@@ -323,10 +325,23 @@ class NewtonSolver:
                                     f"iterations) after {n} iterations")
             if n > STAGNATION and min(residuals[-STAGNATION:]) >= min(residuals[:-STAGNATION]):
                 raise NewtonFailure(f"Newton stagnated ({STAGNATION} iterations without a "
-                                    f"smaller residual) after {n} iterations")
+                                    f"smaller residual) after {n} iterations; "
+                                    + self._shortfall(residuals))
         if n >= self._opts.max_iterations:
             raise NewtonFailure(f"Newton did not converge (iteration limit reached) "
-                                f"after {n} iterations")
+                                f"after {n} iterations; " + self._shortfall(residuals))
+
+    def _shortfall(self, residuals):
+        """The least residual of a step that failed against its target, and the term that
+        sets the target (:meth:`_converged`), for the failure's message."""
+        terms = ((self._opts.rtol * self._first,
+                  f"solver.rtol {self._opts.rtol:.3g} x the step's first residual "
+                  f"{self._first:.3g}"),
+                 (self._opts.atol * self._force_scale,
+                  f"solver.atol {self._opts.atol:.3g} x the force scale {self._force_scale:.3g}"),
+                 (ROUNDING * self._carried, f"{ROUNDING:g} x the force carried {self._carried:.3g}"))
+        target, term = max(terms, key=lambda t: t[0])
+        return f"the residual {min(residuals):.3g} at least against the target {target:.3g}, {term}"
 
     def _line_search(self, x, a, da, norm0):
         """The full step, or a shorter one along it (``bt``, ``cp``); returns the new norm."""
