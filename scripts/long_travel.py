@@ -83,11 +83,13 @@ def costs(results, scene):
 
 
 def _lost(remeshed):
-    """The range of the draft a remesh took off, in percent of the draft before it."""
+    """The range of the draft a remesh took off, in percent of the draft before it (one
+    number where all round alike)."""
     if not remeshed:
         return "–"
     lost = [100 * (1 - r["force_after"] / r["force_before"]) for r in remeshed]
-    return f"{min(lost):.1f}–{max(lost):.1f}%"
+    low, high = f"{min(lost):.1f}", f"{max(lost):.1f}"
+    return f"{low}%" if low == high else f"{low}–{high}%"
 
 
 def main():
