@@ -334,14 +334,16 @@ class NewtonSolver:
     def _shortfall(self, residuals):
         """The least residual of a step that failed against its target, and the term that
         sets the target (:meth:`_converged`), for the failure's message."""
-        terms = ((self._opts.rtol * self._first,
-                  f"solver.rtol {self._opts.rtol:.3g} x the step's first residual "
-                  f"{self._first:.3g}"),
-                 (self._opts.atol * self._force_scale,
-                  f"solver.atol {self._opts.atol:.3g} x the force scale {self._force_scale:.3g}"),
-                 (ROUNDING * self._carried, f"{ROUNDING:g} x the force carried {self._carried:.3g}"))
+        opts = self._opts
+        terms = ((opts.rtol * self._first,
+                  f"solver.rtol {opts.rtol:.3g} x the step's first residual {self._first:.3g}"),
+                 (opts.atol * self._force_scale,
+                  f"solver.atol {opts.atol:.3g} x the force scale {self._force_scale:.3g}"),
+                 (ROUNDING * self._carried,
+                  f"{ROUNDING:g} x the force carried {self._carried:.3g}"))
         target, term = max(terms, key=lambda t: t[0])
-        return f"the residual {min(residuals):.3g} at least against the target {target:.3g}, {term}"
+        return (f"the residual {min(residuals):.3g} at least against the target {target:.3g}, "
+                + term)
 
     def _line_search(self, x, a, da, norm0):
         """The full step, or a shorter one along it (``bt``, ``cp``); returns the new norm."""
