@@ -129,7 +129,6 @@ class NewtonSolver:
         self._on_equations = w.vector.duplicate()
         self._force_scale = 0.0
         self._carried = 0.0   # the largest force carried so far (:meth:`carry`)
-        self._first = 0.0     # the current step's first residual (:meth:`_converged`)
         self._symmetric_tangent = symmetric_tangent
         #: Called at every iterate with (iteration, residual norm, target), e.g. for progress.
         self.on_iterate = None
@@ -248,9 +247,7 @@ class NewtonSolver:
         ``first`` joins), ROUNDING of the force carried."""
         if first > 0.0 and len(residuals) == 1:
             self._force_scale = max(self._force_scale, first)
-        self._first = first
-        target = max(self._opts.rtol * first, self._opts.atol * self._force_scale,
-                     ROUNDING * self._carried)
+        target, _ = self._target(first)
         if self.on_iterate is not None:
             self.on_iterate(len(residuals) - 1, residuals[-1], target)
         if not math.isfinite(residuals[-1]):
@@ -292,7 +289,7 @@ class NewtonSolver:
                 if self._converged(residuals, first):
                     self.stats["iterations"] += len(residuals) - 1
                     return NewtonResult(len(residuals) - 1, tuple(residuals))
-                self._check_progress(residuals)
+                self._check_progress(residuals, first)
                 corrections += 1
                 da = self._newton_step()
                 self._w.vector.copy(x)
@@ -304,7 +301,7 @@ class NewtonSolver:
         finally:
             x.destroy()
 
-    def _check_progress(self, residuals):
+    def _check_progress(self, residuals, first):
         """Raise NewtonFailure if the step is not going to converge: the residual not a
         number or DIVERGENCE times the first, grown in two successive iterations or
         without a new minimum for STAGNATION iterations, or the iteration limit. Under
@@ -326,22 +323,27 @@ class NewtonSolver:
             if n > STAGNATION and min(residuals[-STAGNATION:]) >= min(residuals[:-STAGNATION]):
                 raise NewtonFailure(f"Newton stagnated ({STAGNATION} iterations without a "
                                     f"smaller residual) after {n} iterations; "
-                                    + self._shortfall(residuals))
+                                    + self._shortfall(residuals, first))
         if n >= self._opts.max_iterations:
             raise NewtonFailure(f"Newton did not converge (iteration limit reached) "
-                                f"after {n} iterations; " + self._shortfall(residuals))
+                                f"after {n} iterations; " + self._shortfall(residuals, first))
 
-    def _shortfall(self, residuals):
+    def _target(self, first):
+        """(the step's residual target, which term sets it): the largest of 0 rtol times
+        ``first``, 1 atol times the force scale, 2 ROUNDING times the force carried."""
+        terms = (self._opts.rtol * first, self._opts.atol * self._force_scale,
+                 ROUNDING * self._carried)
+        which = max(range(3), key=terms.__getitem__)
+        return terms[which], which
+
+    def _shortfall(self, residuals, first):
         """The least residual of a step that failed against its target, and the term that
-        sets the target (:meth:`_converged`), for the failure's message."""
+        sets the target (:meth:`_target`), for the failure's message."""
+        target, which = self._target(first)
         opts = self._opts
-        terms = ((opts.rtol * self._first,
-                  f"solver.rtol {opts.rtol:.3g} x the step's first residual {self._first:.3g}"),
-                 (opts.atol * self._force_scale,
-                  f"solver.atol {opts.atol:.3g} x the force scale {self._force_scale:.3g}"),
-                 (ROUNDING * self._carried,
-                  f"{ROUNDING:g} x the force carried {self._carried:.3g}"))
-        target, term = max(terms, key=lambda t: t[0])
+        term = (f"solver.rtol {opts.rtol:.3g} x the step's first residual {first:.3g}",
+                f"solver.atol {opts.atol:.3g} x the force scale {self._force_scale:.3g}",
+                f"{ROUNDING:g} x the force carried {self._carried:.3g}")[which]
         return (f"the residual {min(residuals):.3g} at least against the target {target:.3g}, "
                 + term)
 
