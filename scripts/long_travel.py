@@ -5,9 +5,10 @@ Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each 
 summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
 docs/chapter8.md (--page) two tables: per element and mesh the draft at each inch of travel,
 the lift at the end and the draft over the last sixth of the travel (mean, spread and
-slope); and what the travel cost (cells, remeshes and how many of them were smoothed, steps,
-Newton iterations, wall time, a remesh against a Newton iteration, the plastic work's change by
-each transfer, and the draft a fresh and a smoothed mesh took off). A case
+slope); and what the travel cost (cells, remeshes and how many of them were smoothed or meshed
+afresh around the poor cells alone, steps, Newton iterations, wall time, a remesh against a
+Newton iteration, the plastic work's change by each transfer, and the draft a fresh, a local
+and a smoothed mesh took off). A case
 that failed (a remesh that could not be made) or was interrupted shows how far it went.
 Copies the study's figures into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
@@ -17,6 +18,7 @@ from types import SimpleNamespace
 from soilbin.app.plateau import steady_slope
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
+from soilbin.remesh.remesher import FRESH, LOCAL, MOVED
 from doc_tables import ROOT, write_between_markers
 from study_tables import arguments, at, finished, remeshes, run_study
 
@@ -52,10 +54,10 @@ def drafts(results, scene):
 
 def costs(results, scene):
     lines = ["| element | element size [in] | cells at the start → the end | unknowns at the end | "
-             "remeshes (smoothed) | steps (cuts) | Newton (failed) | wall time [min] | "
+             "remeshes (smoothed, local) | steps (cuts) | Newton (failed) | wall time [min] | "
              "wall time per Newton iteration [s] | a remesh and its transfer [s] | "
              "its re-equilibration [s] | the plastic work's change by a transfer | "
-             "draft lost at a fresh mesh / a smoothed one |",
+             "draft lost at a fresh mesh / a local one / a smoothed one |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for case, summary, _, remeshed in results:
         iterations = summary["newton_iterations"] + summary["failed_newton_iterations"]
@@ -69,17 +71,23 @@ def costs(results, scene):
             equilibrium = f"{min(settled):.0f}–{max(settled):.0f}"
             work = [100 * r["plastic_work_change"] for r in remeshed]
             work = f"{min(work):+.1f}% to {max(work):+.1f}%"
-            lost = " / ".join(_lost([r for r in remeshed if r["smoothed"] == kept])
-                              for kept in (0, 1))
+            lost = " / ".join(_lost([r for r in remeshed if _kept(r) == kept])
+                              for kept in (FRESH, LOCAL, MOVED))
         else:
             remesh = equilibrium = work = lost = "–"
-        smoothed = sum(int(r["smoothed"]) for r in remeshed)
+        smoothed, local = (sum(_kept(r) == kept for r in remeshed) for kept in (MOVED, LOCAL))
         lines.append(f"| {mesh_of(case, scene)} | {first} → {summary['n_cells']} | "
-                     f"{summary['n_dofs']} | {len(remeshed)} ({smoothed}) | {summary['n_steps']} "
+                     f"{summary['n_dofs']} | {len(remeshed)} ({smoothed}, {local}) | "
+                     f"{summary['n_steps']} "
                      f"({summary['cuts']}) | {summary['newton_iterations']} "
                      f"({summary['failed_newton_iterations']}) | {summary['wall_s'] / 60:.0f} | "
                      f"{per_iteration:.2f} | {remesh} | {equilibrium} | {work} | {lost} |")
     return "\n".join(lines)
+
+
+def _kept(remesh):
+    """How much of the old mesh a remesh (a row of remeshes.csv) kept."""
+    return MOVED if remesh["smoothed"] else LOCAL if remesh["local"] else FRESH
 
 
 def _lost(remeshed):

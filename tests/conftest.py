@@ -109,3 +109,29 @@ def central_differences(model, deps, state, h):
         fd[:, :, j] = (model.update(deps + step, state)[0]
                        - model.update(deps - step, state)[0]) / (2.0 * h)
     return fd
+
+
+#: A unit cube's six tetrahedra around its diagonal from corner 0 to corner 7 (corner k at
+#: the bits of k: x, y, z).
+KUHN = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]]
+
+
+def kuhn_cube(n=2):
+    """The unit cube cut into n x n x n cubes of six tetrahedra each: (nodes ((n + 1)^3, 3),
+    cells (6 n^3, 4), boundary triangles (12 n^2, 3) turned outward, their tags: 1 + the
+    cube's face, xmin .. zmax)."""
+    unit = np.array([[k & 1, (k >> 1) & 1, (k >> 2) & 1] for k in range(8)], dtype=float)
+    corners = np.concatenate([(unit[KUHN] + [i, j, k]) / n
+                              for i in range(n) for j in range(n) for k in range(n)])
+    points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
+    cells = index.reshape(-1, 4)
+    faces = np.sort(cells[:, [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]].reshape(-1, 3), axis=1)
+    unique, count = np.unique(faces, axis=0, return_counts=True)
+    triangles = unique[count == 1]
+    centre = points[triangles].mean(axis=1)
+    axis = np.argmin(np.minimum(centre, 1.0 - centre), axis=1)
+    high = centre[np.arange(len(centre)), axis] > 0.5
+    a, b, c = (points[triangles[:, k]] for k in range(3))
+    outward = np.cross(b - a, c - a)[np.arange(len(centre)), axis] * np.where(high, 1, -1) > 0
+    triangles[~outward] = triangles[~outward][:, [0, 2, 1]]
+    return points, cells, triangles, 1 + 2 * axis + high

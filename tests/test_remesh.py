@@ -624,7 +624,7 @@ def test_remeshing_a_scene_it_cannot_is_refused_on_reading(overrides, words):
 def test_a_surface_gmsh_cannot_map_ends_the_run_with_its_steps_on_disk(tmp_path, monkeypatch):
     """gmsh's own error while mapping the patches (a bare Exception: the tine's soil after 4 in
     of travel) is a failed remesh, not an internal error: status failed, steps on disk."""
-    def unmappable():
+    def unmappable(dim_tags=()):
         raise Exception("Wrong topology of boundary mesh for parametrization")
     monkeypatch.setattr(gmsh.model.mesh, "createGeometry", unmappable)
     summary = run_scene(load_scene(SCENES / "block-drucker-prager.toml", BLOCK_3D), tmp_path)

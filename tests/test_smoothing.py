@@ -6,40 +6,14 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from conftest import SCENES
+from conftest import SCENES, kuhn_cube
 from soilbin.app.run import run_scene
 from soilbin.problem.mesh_quality import simplex_quality
 from soilbin.records.scene import load_scene
-from soilbin.remesh.mesher import mesh_cells, read_mesh
-from soilbin.remesh.remesher import SMOOTHED, Remeshing
+from soilbin.remesh.mesher import Sizes, mesh_cells, read_mesh
+from soilbin.remesh.remesher import FRESH, MOVED, SMOOTHED, Remeshing
 from soilbin.remesh.smoothing import on_triangles, smoothed
 from soilbin.remesh.surface import Surface
-
-#: A unit cube's six tetrahedra around its diagonal from corner 0 to corner 7 (corner k at
-#: the bits of k: x, y, z).
-KUHN = [[0, 1, 3, 7], [0, 1, 5, 7], [0, 2, 3, 7], [0, 2, 6, 7], [0, 4, 5, 7], [0, 4, 6, 7]]
-
-
-def kuhn_cube():
-    """The unit cube cut into 2 x 2 x 2 cubes of six tetrahedra each: (nodes (27, 3), cells
-    (48, 4), boundary triangles (48, 3) turned outward, their tags: 1 + the cube's face,
-    xmin .. zmax)."""
-    unit = np.array([[k & 1, (k >> 1) & 1, (k >> 2) & 1] for k in range(8)], dtype=float)
-    corners = np.concatenate([0.5 * (unit[KUHN] + [i, j, k])
-                              for i in range(2) for j in range(2) for k in range(2)])
-    points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
-    cells = index.reshape(-1, 4)
-    faces = np.sort(cells[:, [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]].reshape(-1, 3), axis=1)
-    unique, count = np.unique(faces, axis=0, return_counts=True)
-    triangles = unique[count == 1]
-    centre = points[triangles].mean(axis=1)
-    axis = np.argmin(np.minimum(centre, 1.0 - centre), axis=1)
-    high = centre[np.arange(len(centre)), axis] > 0.5
-    a, b, c = (points[triangles[:, k]] for k in range(3))
-    outward = np.cross(b - a, c - a)[np.arange(len(centre)), axis] * np.where(high, 1, -1) > 0
-    triangles[~outward] = triangles[~outward][:, [0, 2, 1]]
-    return points, cells, triangles, 1 + 2 * axis + high
-
 
 def least_quality(points, cells, orientation):
     return (orientation * simplex_quality(points[cells])).min()
@@ -114,8 +88,8 @@ def test_a_point_is_projected_onto_the_triangle_under_it():
 def test_a_remesh_below_min_quality_keeps_the_cells_where_smoothing_mends_them(tmp_path):
     """The remesher's path (rank 0's gathered corners and surface): the distorted cube
     mended to SMOOTHED min_quality, its cells and facets kept and distributed as a mesh with
-    the six facet groups; with min_quality above what moving nodes can reach, None (the soil
-    is meshed afresh)."""
+    the six facet groups; with min_quality above what moving nodes or meshing afresh around
+    the poor cells can reach, None (the soil is meshed afresh)."""
     points, cells, triangles, tags = kuhn_cube()
     centre = np.flatnonzero((points == 0.5).all(axis=1))[0]
     points[centre] = [0.5, 0.5, 0.1]
@@ -124,8 +98,10 @@ def test_a_remesh_below_min_quality_keeps_the_cells_where_smoothing_mends_them(t
     scene = load_scene(SCENES / "block-drucker-prager.toml",
                        ["analysis.element=tet10", "analysis.large_deformation=true",
                         "remesh.min_quality=0.3"])
-    moved, kept_cells, kept_triangles, kept_tags = Remeshing(scene, tmp_path)._smoothed(
-        state, surface)
+    sizes = Sizes(points[cells], np.full(cells.shape, 0.5))
+    (moved, kept_cells, kept_triangles, kept_tags), how = Remeshing(scene, tmp_path)._mended(
+        state, surface, sizes)
+    assert how == MOVED
     assert np.array_equal(kept_cells, cells)             # the nodes numbered as they sort
     assert moved[centre, 2] > 0.2 and volume(moved, cells) == pytest.approx(1.0, rel=1e-12)
     orientation = np.sign(simplex_quality(points[cells]))
@@ -145,7 +121,7 @@ def test_a_remesh_below_min_quality_keeps_the_cells_where_smoothing_mends_them(t
     strict = load_scene(SCENES / "block-drucker-prager.toml",
                         ["analysis.element=tet10", "analysis.large_deformation=true",
                          "remesh.min_quality=0.9"])
-    assert Remeshing(strict, tmp_path)._smoothed(state, surface) is None
+    assert Remeshing(strict, tmp_path)._mended(state, surface, sizes) == (None, FRESH)
 
 
 @pytest.mark.slow
@@ -163,7 +139,8 @@ def test_a_tine_s_soil_below_min_quality_is_smoothed_and_loses_less_draft(tmp_pa
     for smooth in (True, False):
         folder = tmp_path / str(smooth)
         scene = load_scene(SCENES / "tine-2in-cad.toml",
-                           overrides + [f"remesh.smooth_first={str(smooth).lower()}"])
+                           overrides + [f"remesh.smooth_first={str(smooth).lower()}",
+                                        "remesh.local_first=false"])
         assert run_scene(scene, folder)["status"] == "complete"
         with open(folder / "remeshes.csv") as f:
             first = next(csv.DictReader(f))

@@ -260,7 +260,7 @@ def _progress(record):
 
 
 def _remesh_progress(report):
-    how = "smoothed" if report.smoothed else "remeshed"
+    how = "smoothed" if report.smoothed else "remeshed locally" if report.local else "remeshed"
     print(f"  {how} after step {report.step}: {report.cells_before} -> {report.cells_after} "
           f"cells, quality {report.quality_before:.3g} -> {report.quality_after:.3g}, force "
           f"{report.force_before:.5g} -> {report.force_after:.5g} ({report.newton_iterations} "

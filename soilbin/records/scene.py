@@ -296,6 +296,11 @@ class Remesh(Params):
                                          "least scaled Jacobian to 1.15 min_quality (the "
                                          "transfer then loses far less force); else it is "
                                          "meshed afresh")
+    local_first: bool = param(True, doc="a three-dimensional soil below min_quality that "
+                                        "smoothing does not mend is meshed afresh only "
+                                        "around its cells below 1.15 min_quality (up to "
+                                        "three layers of neighbours), the rest kept, where "
+                                        "that lifts it to 1.15 min_quality; else all of it")
 
     @property
     def active(self):

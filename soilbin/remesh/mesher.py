@@ -22,7 +22,11 @@ tine's soil), and again by MeshAdapt (0.46 s) where Delaunay fails or leaves a t
 below the scene's ``remesh.min_quality`` or :data:`FRESH_QUALITY` (on the mapped patches of
 the tine's soil Frontal-Delaunay once left hundreds of inverted triangles). gmsh's own
 ``classifySurfaces`` does not cut at a group's border where the boundary is flat (the footing
-beside the free surface)."""
+beside the free surface).
+
+A cavity cut out of the soil's mesh (:func:`mesh_cavity`, for :mod:`.local`) is meshed the same
+way, but for the patches that are to stay: they keep their triangles, and the curves around
+them their edges (gmsh maps and meshes only the others, then the volume)."""
 import dataclasses
 import math
 import re
@@ -103,7 +107,7 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
             if attempt:
                 gmsh.model.remove()
                 gmsh.view.remove(view)
-            view, groups = _surface_model(surface, sizes, regions, boundaries)
+            view, groups, _ = _surface_model(surface, sizes, regions, boundaries)
             gmsh.option.setNumber("Mesh.Algorithm", algorithm)
             try:
                 _generate(3)
@@ -123,8 +127,9 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
 def mesh_cells(comm, points, cells, triangles, tags, regions, boundaries, path):
     """The TaggedMesh of the tetrahedra ``cells`` (m, 4) on the ``points`` (n, 3), with the
     boundary ``triangles`` (k, 3) in the facet groups ``tags`` (k,) (rank 0; None elsewhere):
-    an old mesh with its nodes moved (:mod:`.smoothing`), distributed and written to the gmsh
-    file ``path``; ``regions``, ``boundaries`` as :func:`mesh_outline`'s."""
+    an old mesh with its nodes moved (:mod:`.smoothing`) or meshed afresh in part
+    (:mod:`.local`), distributed and written to the gmsh file ``path``; ``regions``,
+    ``boundaries`` as :func:`mesh_outline`'s."""
     def model():
         gmsh.model.add("smoothed")
         volume = gmsh.model.addDiscreteEntity(3)
@@ -145,6 +150,40 @@ def mesh_cells(comm, points, cells, triangles, tags, regions, boundaries, path):
     return distribute(comm, "remesh", model, dimension=3)
 
 
+def mesh_cavity(surface, sizes, keep, least):
+    """The tetrahedra inside the closed :class:`~.surface.Surface` ``surface`` (a cavity cut
+    out of a mesh, :mod:`.local`), the patches made of its triangles ``keep`` (a mask) alone
+    kept as they are, the others meshed afresh by Delaunay at the ``sizes``: (the points
+    (n, 3), the tetrahedra (m, 4) into them, the fresh patches' triangles (k, 3) and their
+    tags (k,)), or None where gmsh fails or leaves a tetrahedron below ``least`` (rank 0
+    alone: gmsh is started and stopped here)."""
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        _, groups, kept = _surface_model(surface, sizes, {"cavity": 1}, {}, keep)
+        gmsh.option.setNumber("Mesh.Algorithm", DELAUNAY)
+        _generate(3)
+        if _least_quality() < least:
+            return None
+        tags, coordinates, _ = gmsh.model.mesh.getNodes()
+        number = np.zeros(int(tags.max()) + 1, dtype=int)
+        number[tags] = np.arange(len(tags))
+        _, _, nodes = gmsh.model.mesh.getElements(3)
+        triangles, of = [], []
+        for patch, tag in groups.items():
+            if patch not in kept:
+                _, _, on_patch = gmsh.model.mesh.getElements(2, patch)
+                triangles.append(np.concatenate(on_patch).reshape(-1, 3))
+                of.append(np.full(len(triangles[-1]), tag))
+        return (coordinates.reshape(-1, 3), number[np.concatenate(nodes).reshape(-1, 4)],
+                number[np.concatenate(triangles)] if triangles else np.zeros((0, 3), int),
+                np.concatenate(of) if of else np.zeros(0, int))
+    except RuntimeError:
+        return None
+    finally:
+        gmsh.finalize()
+
+
 def patch_groups(message, groups, boundaries):
     """The facet groups of the patches that a gmsh ``message`` names ("surface 4"), as
     "; gmsh's surface 4 is a patch of tool_front, 9 of surface" ('' if it names none);
@@ -160,14 +199,21 @@ def patch_groups(message, groups, boundaries):
             + "".join(f", {patch} of {group}" for patch, group in rest))
 
 
-def _surface_model(surface, sizes, regions, boundaries):
+def _surface_model(surface, sizes, regions, boundaries, keep=None):
     """The gmsh model of the volume inside ``surface``, its groups and its background size,
-    ready to mesh; returns the size's view and each patch's (gmsh surface's) facet group
-    tag."""
+    ready to mesh, the patches made of the triangles ``keep`` (a mask, or None) alone
+    keeping theirs; returns the size's view, each patch's (gmsh surface's) facet group tag
+    and the set of the patches kept."""
     gmsh.model.add("remesh")
-    groups = _discrete_model(surface)
+    groups, kept = _discrete_model(surface, keep)
+    fresh = [(2, patch) for patch in groups if patch not in kept]
+    around = {abs(curve) for _, curve in gmsh.model.getBoundary([(2, p) for p in kept],
+                                                                 oriented=False)}
+    fresh += sorted({(1, abs(curve)) for _, curve in gmsh.model.getBoundary(fresh, oriented=False)
+                     if abs(curve) not in around})
     try:
-        gmsh.model.mesh.createGeometry()
+        if fresh or not kept:   # createGeometry([]) maps every discrete entity
+            gmsh.model.mesh.createGeometry(fresh if kept else [])
     except Exception as err:   # gmsh raises a bare Exception with its last error
         raise RuntimeError(f"gmsh cannot map the deformed soil's boundary patches onto "
                            f"planes ({err}): a patch is no longer a topological "
@@ -183,14 +229,15 @@ def _surface_model(surface, sizes, regions, boundaries):
         if members:
             gmsh.model.addPhysicalGroup(2, members, tag)
             gmsh.model.setPhysicalName(2, tag, group)
-    return _size_field(sizes), groups
+    return _size_field(sizes), groups, kept
 
 
-def _discrete_model(surface):
+def _discrete_model(surface, keep=None):
     """The surface as gmsh's discrete entities, numbered in the order of its own
     :meth:`~.surface.Surface.borders` (gmsh's ``createTopology`` numbers them differently from
     run to run): a point per corner, a curve per border, a surface per patch, each holding
-    its nodes and elements. Returns each surface entity's facet group tag."""
+    its nodes and elements. Returns each surface entity's facet group tag and the set of
+    those made of the triangles ``keep`` (a mask, or None: none) alone."""
     model, mesh = gmsh.model, gmsh.model.mesh
     patch_of = surface.patches(CREASE)
     borders = surface.borders(patch_of)
@@ -216,7 +263,11 @@ def _discrete_model(surface):
     for patch, entity in enumerate(patches):
         triangles = surface.triangles[patch_of == patch] + 1
         mesh.addElementsByType(entity, 2, [], triangles.ravel())
-    return {entity: surface.tags[patch_of == patch][0] for patch, entity in enumerate(patches)}
+    groups = {entity: surface.tags[patch_of == patch][0] for patch, entity in enumerate(patches)}
+    if keep is None:
+        return groups, set()
+    fresh = np.bincount(patch_of, weights=~keep, minlength=len(patches))
+    return groups, {entity for patch, entity in enumerate(patches) if fresh[patch] == 0}
 
 
 def read_mesh(comm, path, regions, boundaries, dimension=2):

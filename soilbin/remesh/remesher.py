@@ -39,6 +39,7 @@ from ..solver.newton import NewtonResult
 from ..solver.quadrature import PLASTIC_WORK, quadrature_space
 from .mesher import Sizes, mesh_cells, mesh_outline, mesh_surface
 from .outline import OutlineError, gather_outline, initial_sizes
+from .local import remeshed_around
 from .smoothing import smoothed
 from .surface import gather_surface
 from .transfer import OldCells, cell_simplices
@@ -55,9 +56,13 @@ EQUILIBRIUM_FLOOR = 1e-2
 #: The run folder's folder of the meshes that remeshing made.
 MESHES = "meshes"
 #: A three-dimensional soil whose least quality fell below min_quality keeps its cells, its
-#: nodes moved (:mod:`.smoothing`), where that lifts the least quality to this many times
-#: min_quality (the fresh meshes of the tine's soil reach 1.1-2.2 times its 0.045).
+#: nodes moved (:mod:`.smoothing`), or else its cells away from the poor ones (:mod:`.local`),
+#: where that lifts the least quality to this many times min_quality (the fresh meshes of the
+#: tine's soil reach 1.1-2.2 times its 0.045).
 SMOOTHED = 1.15
+#: How much of the old mesh a remesh kept: none, its cells (nodes moved), the cells away from
+#: the poor ones (:meth:`Remeshing._mended`).
+FRESH, MOVED, LOCAL = "fresh", "moved", "local"
 
 
 class RemeshError(RuntimeError):
@@ -74,8 +79,9 @@ class RemeshReport:
     of its plastic work (:data:`~soilbin.solver.quadrature.PLASTIC_WORK`) by the transfer, the
     least scaled Jacobian before and after, the seconds spent: meshing (the outline
     gathered, gmsh, the mesh distributed), the new problem with its transferred state, the
-    re-equilibration, and all of it; and 1 where the old cells were kept, their nodes moved
-    (``remesh.smooth_first``), 0 where the soil was meshed afresh."""
+    re-equilibration, and all of it; 1 where the old cells were kept, their nodes moved
+    (``remesh.smooth_first``), and 1 where the soil was meshed afresh around its poor cells
+    alone (``remesh.local_first``); both 0 where the whole soil was meshed afresh."""
     step: int
     load_factor: float
     cells_before: int
@@ -96,6 +102,7 @@ class RemeshReport:
     equilibrium_s: float
     wall_s: float
     smoothed: int
+    local: int
 
 
 class Remeshing:
@@ -148,7 +155,7 @@ class Remeshing:
         start = time.perf_counter()
         before = soil_integrals(problem)
         try:
-            new, mesh_s, kept = self._transferred(problem, record.step, self._smooths(record))
+            new, mesh_s, how = self._transferred(problem, record.step, self._mends(record))
         except (OutlineError, RuntimeError) as err:
             raise RemeshError(f"remeshing after step {record.step} failed: {err}") from None
         transferred = soil_integrals(new)
@@ -178,23 +185,26 @@ class Remeshing:
             quality_after=seen.columns.get("mesh_quality", float("nan")),
             mesh_s=mesh_s, transfer_s=transfer_s,
             equilibrium_s=time.perf_counter() - start - mesh_s - transfer_s,
-            wall_s=time.perf_counter() - start, smoothed=int(kept))
+            wall_s=time.perf_counter() - start, smoothed=int(how == MOVED),
+            local=int(how == LOCAL))
         self.reports.append(report)
         self._last = record.step
         self.count += 1
         return new
 
-    def _smooths(self, record):
-        """Whether to try mending the mesh by moving its nodes before meshing afresh: where
-        its quality fell below min_quality (:meth:`_transferred` tries it in three
-        dimensions only)."""
-        return (self.settings.smooth_first
-                and record.columns.get("mesh_quality", 1.0) < self.settings.min_quality)
+    def _mends(self, record):
+        """Whether to try keeping part of the old mesh (its cells, nodes moved; else its cells
+        away from the poor ones): where its quality fell below min_quality
+        (:meth:`_transferred` tries it in three dimensions only)."""
+        return record.columns.get("mesh_quality", 1.0) < self.settings.min_quality
 
-    def _transferred(self, old, step, smooth):
+    def _transferred(self, old, step, mend):
         """A new problem on a new mesh of ``old``'s deformed soil, with its state, the seconds
-        the mesh took and whether it is the old cells on moved nodes (tried where ``smooth``;
-        else a fresh mesh)."""
+        the mesh took and how much of the old mesh it kept (:data:`FRESH`, :data:`MOVED` or
+        :data:`LOCAL`). Where ``mend``: the old cells with nodes moved
+        (``remesh.smooth_first``), else the old mesh meshed afresh around its poor cells
+        alone (``remesh.local_first``); else, or where neither reaches :data:`SMOOTHED`
+        min_quality, a fresh mesh."""
         start = time.perf_counter()
         comm, tagged, scene = old.comm, old.tagged, self.scene
         element = old.disc.element
@@ -204,20 +214,19 @@ class Remeshing:
         state = layout.gather_state(old.state())
         samples = layout.gather(layout.by_cell(POINTS, _point_coordinates(old)))
         contact = _contact_points(old)
-        sizes, kept = None, None
-        smooth = smooth and not planar
+        sizes, kept, how = None, None, FRESH
         if comm.rank == 0:
             boundary, sizes = self._mesher_input(state, boundary, element.simplex,
                                                  old.disc.dimension, _tool_shift(old))
-            if smooth:
-                kept = self._smoothed(state, boundary)
-        kept_cells = comm.bcast(kept is not None, root=0)
+            if mend and not planar:
+                kept, how = self._mended(state, boundary, sizes)
+        how = comm.bcast(how, root=0)
         mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
         groups = dict(tagged.regions), dict(tagged.boundaries)
         if planar:
             new_tagged = mesh_outline(comm, boundary, sizes, *groups, element.simplex,
                                       self.folder / mesh_file)
-        elif kept_cells:
+        elif how != FRESH:
             new_tagged = mesh_cells(comm, *(kept or (None,) * 4), *groups,
                                     self.folder / mesh_file)
         else:
@@ -241,13 +250,13 @@ class Remeshing:
         new.points.settle_history()
         if element.mixed:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
-        return new, mesh_s, kept_cells
+        return new, mesh_s, how
 
-    def _smoothed(self, state, surface):
-        """(the nodes, the old cells and the boundary's triangles and tags on them) with the
-        nodes moved to mend the cells below :data:`SMOOTHED` min_quality (:mod:`.smoothing`),
-        or None where that does not lift them all there (rank 0; ``state``'s corners and the
-        ``surface`` on the same grid)."""
+    def _mended(self, state, surface, sizes):
+        """(the nodes, cells and the boundary's triangles and tags of a mesh that keeps what
+        it can of the old one, and :data:`MOVED` or :data:`LOCAL`), or (None,
+        :data:`FRESH`) where neither lifts the least quality to :data:`SMOOTHED` min_quality
+        (rank 0; ``state``'s corners and the ``surface`` on the same grid)."""
         corners = state["kinematics/mesh_x"][1]
         points, index = np.unique(corners.reshape(-1, 3), axis=0, return_inverse=True)
         cells = index.reshape(len(corners), -1)
@@ -257,8 +266,15 @@ class Remeshing:
             raise RuntimeError("the soil's boundary is not on its cells' corners")
         triangles = of_surface[len(points):][surface.triangles]
         target = SMOOTHED * self.settings.min_quality
-        moved, least = smoothed(points, cells, triangles, surface.tags, target)
-        return (moved, cells, triangles, surface.tags) if least >= target else None
+        if self.settings.smooth_first:
+            moved, least = smoothed(points, cells, triangles, surface.tags, target)
+            if least >= target:
+                return (moved, cells, triangles, surface.tags), MOVED
+        if self.settings.local_first:
+            around = remeshed_around(points, cells, triangles, surface.tags, sizes, target)
+            if around is not None:
+                return around, LOCAL
+        return None, FRESH
 
     def _mesher_input(self, state, boundary, simplices, d, tool_shift):
         """(the boundary: in 2D the outline sampled at the sizes, in 3D the surface; the
