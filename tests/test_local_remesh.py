@@ -90,3 +90,20 @@ def test_a_cavity_that_cannot_reach_the_target_gives_none():
     points, cells, triangles, tags = kuhn_cube(3)
     sizes = Sizes(points[cells], np.full(cells.shape, 0.3))
     assert remeshed_around(points, cells, triangles, tags, sizes, 1.01) is None
+
+
+def test_a_fresh_patch_that_makes_a_triangle_as_it_was_bounds_the_mesh_once():
+    """gmsh's fresh mesh of a cavity's patch can give back one of its old triangles: the
+    merged mesh lists it once (twice, it was refused as not conforming and the soil was
+    meshed afresh throughout)."""
+    from soilbin.remesh.local import _conforming, _merged
+    from soilbin.remesh.surface import Surface
+    points, cells, triangles, tags = kuhn_cube(2)
+    surface = Surface.of(points[triangles], tags)
+    again = tags == 1    # the face x = 0 "meshed afresh" into its own triangles
+    fresh = (points, cells, triangles[again], tags[again])
+    new_points, new_cells, new_triangles, new_tags = _merged(
+        points, cells[:0], triangles, tags, surface, np.ones(len(triangles), bool), fresh)
+    assert len(new_triangles) == len(triangles)
+    assert np.array_equal(np.bincount(new_tags), np.bincount(tags))
+    assert _conforming(new_cells, new_triangles, len(new_points))

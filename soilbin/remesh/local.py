@@ -99,13 +99,15 @@ def _merged(points, kept_cells, triangles, tags, surface, on_boundary, fresh):
                          axis=1)
     gone = on_surface[~np.isin(_keys(on_surface, n), faces)]
     replaced = np.isin(_keys(np.sort(old[triangles], axis=1), n), _keys(gone, n))
+    triangles = np.concatenate([old[triangles][~replaced], new[new_triangles]])
+    # a fresh patch may make a triangle as it was: once
+    _, once = np.unique(_keys(np.sort(triangles, axis=1), n), return_index=True)
     cells = np.concatenate([old[kept_cells], new[new_cells]])
     used, cells = np.unique(cells, return_inverse=True)   # the cavity's old inner nodes go
     number = np.full(n, -1)
     number[used] = np.arange(len(used))
-    return (merged[used], cells.reshape(-1, 4),
-            number[np.concatenate([old[triangles][~replaced], new[new_triangles]])],
-            np.concatenate([tags[~replaced], new_tags]))
+    return (merged[used], cells.reshape(-1, 4), number[triangles[np.sort(once)]],
+            np.concatenate([tags[~replaced], new_tags])[np.sort(once)])
 
 
 def _conforming(cells, triangles, n):
