@@ -75,10 +75,9 @@ def _cavity_surface(points, cavity, triangles, tags, boundary, poor_faces):
     inward = np.repeat(simplex_quality(points[cavity]) < 0.0, 4)[once]
     faces, key = faces[once], key[once]
     faces[inward] = faces[inward][:, ::-1]
-    face_tags = np.full(len(faces), INNER)
-    by_key = dict(zip(_keys(np.sort(triangles, axis=1), n).tolist(), tags.tolist()))
-    for k, face_key in enumerate(key.tolist()):
-        face_tags[k] = by_key.get(face_key, INNER)
+    order = np.argsort(boundary)
+    at = order[np.minimum(np.searchsorted(boundary[order], key), len(order) - 1)]
+    face_tags = np.where(boundary[at] == key, tags[at], INNER)
     surface = Surface.of(points[faces], face_tags)
     mine = _keys(np.sort(_numbers(surface.points, points)[surface.triangles], axis=1), n)
     on_boundary = np.isin(mine, boundary)

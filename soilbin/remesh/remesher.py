@@ -37,9 +37,9 @@ from ..problem import SoilProblem
 from ..problem.loads import start_mean_pressure
 from ..solver.newton import NewtonResult
 from ..solver.quadrature import PLASTIC_WORK, quadrature_space
+from .local import remeshed_around
 from .mesher import Sizes, mesh_cells, mesh_outline, mesh_surface
 from .outline import OutlineError, gather_outline, initial_sizes
-from .local import remeshed_around
 from .smoothing import smoothed
 from .surface import gather_surface
 from .transfer import OldCells, cell_simplices
