@@ -23,6 +23,18 @@ def rows(points, cells):
     return {tuple(sorted(map(tuple, points[cell]))) for cell in cells}
 
 
+def remeshed_cube(points, cells, triangles, tags, target):
+    """The Kuhn cube (distorted) meshed afresh around its cells below ``target``, checked:
+    every cell above ``target``, conforming, its volume kept."""
+    sizes = Sizes(points[cells], np.full(cells.shape, 0.25))
+    new_points, new_cells, new_triangles, new_tags = remeshed_around(points, cells, triangles,
+                                                                     tags, sizes, target)
+    assert quality(new_points, new_cells).min() >= target
+    check_mesh(new_points, new_cells, new_triangles)
+    assert volume(new_points, new_cells) == pytest.approx(1.0, rel=1e-12)
+    return new_points, new_cells, new_triangles, new_tags
+
+
 def check_mesh(points, cells, triangles):
     """Each face of the cells joins two of them but the boundary triangles, each of which
     bounds one, turned outward (seen from its cell's fourth corner)."""
@@ -47,12 +59,8 @@ def test_an_interior_node_pushed_toward_a_face_is_meshed_afresh_around_it_alone(
     target = 0.3 * best
     poor = quality(points, cells) < target
     assert poor.any()
-    sizes = Sizes(points[cells], np.full(cells.shape, 0.25))
-    new_points, new_cells, new_triangles, new_tags = remeshed_around(points, cells, triangles,
-                                                                     tags, sizes, target)
-    assert quality(new_points, new_cells).min() >= target
-    check_mesh(new_points, new_cells, new_triangles)
-    assert volume(new_points, new_cells) == pytest.approx(1.0, rel=1e-12)
+    new_points, new_cells, new_triangles, new_tags = remeshed_cube(points, cells, triangles,
+                                                                   tags, target)
     near = np.isin(cells, cells[np.isin(cells, cells[poor]).any(axis=1)]).any(axis=1)
     far = ~np.isin(cells, cells[near]).any(axis=1)
     assert rows(points, cells[far]) <= rows(new_points, new_cells)
@@ -69,13 +77,8 @@ def test_a_face_node_slid_toward_an_edge_has_its_face_meshed_afresh_around_it():
     best = quality(points, cells).min()
     node = np.flatnonzero((points == [0.5, 0.5, 0.0]).all(axis=1))[0]
     points[node] = [0.5, 0.06, 0.0]
-    target = 0.3 * best
-    sizes = Sizes(points[cells], np.full(cells.shape, 0.25))
-    new_points, new_cells, new_triangles, new_tags = remeshed_around(points, cells, triangles,
-                                                                     tags, sizes, target)
-    assert quality(new_points, new_cells).min() >= target
-    check_mesh(new_points, new_cells, new_triangles)
-    assert volume(new_points, new_cells) == pytest.approx(1.0, rel=1e-12)
+    new_points, new_cells, new_triangles, new_tags = remeshed_cube(points, cells, triangles,
+                                                                   tags, 0.3 * best)
     bottom = new_triangles[new_tags == 5]
     assert np.allclose(new_points[bottom][:, :, 2], 0.0)
     a, b, c = (new_points[bottom[:, k]] for k in range(3))
