@@ -135,3 +135,9 @@ def kuhn_cube(n=2):
     outward = np.cross(b - a, c - a)[np.arange(len(centre)), axis] * np.where(high, 1, -1) > 0
     triangles[~outward] = triangles[~outward][:, [0, 2, 1]]
     return points, cells, triangles, 1 + 2 * axis + high
+
+
+def volume(points, cells):
+    """The volume of the tetrahedra ``cells`` (m, 4) on the ``points`` (n, 3)."""
+    a, b, c, d = (points[cells[:, k]] for k in range(4))
+    return np.abs(np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)).sum() / 6.0

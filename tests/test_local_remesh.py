@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from conftest import kuhn_cube
+from conftest import kuhn_cube, volume
 from soilbin.problem.mesh_quality import simplex_quality
 from soilbin.remesh.local import FACES, remeshed_around
 from soilbin.remesh.mesher import Sizes
@@ -11,11 +11,6 @@ from soilbin.remesh.mesher import Sizes
 
 def quality(points, cells):
     return np.abs(simplex_quality(points[cells]))
-
-
-def volume(points, cells):
-    a, b, c, d = (points[cells[:, k]] for k in range(4))
-    return np.abs(np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)).sum() / 6.0
 
 
 def rows(points, cells):

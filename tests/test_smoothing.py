@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from conftest import SCENES, kuhn_cube
+from conftest import SCENES, kuhn_cube, volume
 from soilbin.app.run import run_scene
 from soilbin.problem.mesh_quality import simplex_quality
 from soilbin.records.scene import load_scene
@@ -17,11 +17,6 @@ from soilbin.remesh.surface import Surface
 
 def least_quality(points, cells, orientation):
     return (orientation * simplex_quality(points[cells])).min()
-
-
-def volume(points, cells):
-    a, b, c, d = (points[cells[:, k]] for k in range(4))
-    return np.abs(np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)).sum() / 6.0
 
 
 def test_an_interior_node_pushed_toward_a_face_goes_back_to_the_centre():
