@@ -1,9 +1,10 @@
-"""The 2-in tool's long travel against the mesh: studies/tine-long-travel.toml, its tables in
-docs/chapter8.md.
+"""The 2-in tool's long travel against the mesh: studies/tine-long-travel.toml (the cap soil)
+or, with --study tine-long-clay, studies/tine-long-clay.toml (the undrained clay); their tables
+in docs/chapter8.md.
 
-Runs `soilbin study studies/tine-long-travel.toml` (resumable), then reads each case's
-summary.json, curve.csv and remeshes.csv and writes between the tine-long-travel markers of
-docs/chapter8.md (--page) two tables: per element and mesh the draft at each inch of travel,
+Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summary.json,
+curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
+two tables: per element and mesh the draft at each inch of the scene's travel,
 the lift at the end and the draft over the last sixth of the travel (mean, spread and
 slope); and what the travel cost (cells, remeshes and how many of them were smoothed or meshed
 afresh around the poor cells alone, steps, Newton iterations, wall time, a remesh against a
@@ -15,6 +16,8 @@ Copies the study's figures into docs/figures (--figures DIR). Loads in lb, trave
 import shutil
 from types import SimpleNamespace
 
+import numpy as np
+
 from soilbin.app.plateau import steady_slope
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
@@ -22,10 +25,9 @@ from soilbin.remesh.remesher import FRESH, LOCAL, MOVED
 from doc_tables import ROOT, write_between_markers
 from study_tables import arguments, at, finished, remeshes, run_study
 
-NAME = "tine-long-travel"
+STUDIES = ("tine-long-travel", "tine-long-clay")
 SIZE = "mesh.element_size"
 ELEMENT = "analysis.element"
-TRAVELS = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
 
 
 def mesh_of(case, scene):
@@ -37,13 +39,14 @@ def mesh_of(case, scene):
 
 
 def drafts(results, scene):
+    travels = np.arange(1.0, scene.loading.magnitude + 1e-9)   # each inch
     lines = ["| element | element size [in] | travel [in] (status) | "
-             + " | ".join(f"draft at {t:g} in [lb]" for t in TRAVELS)
+             + " | ".join(f"draft at {t:g} in [lb]" for t in travels)
              + " | lift at the end [lb] | draft over the last sixth of the travel [lb] | its spread "
              "| its slope [lb/in] |",
-             "| --- | --- | --- | " + "--- | " * len(TRAVELS) + "--- | --- | --- | --- |"]
+             "| --- | --- | --- | " + "--- | " * len(travels) + "--- | --- | --- | --- |"]
     for case, summary, rows, _ in results:
-        cells = [f"{d:.1f}" if (d := at(rows, "force", t)) is not None else "–" for t in TRAVELS]
+        cells = [f"{d:.1f}" if (d := at(rows, "force", t)) is not None else "–" for t in travels]
         lines.append(f"| {mesh_of(case, scene)} | {rows[-1]['displacement']:.2f} "
                      f"({summary['status']}) | "
                      + " | ".join(cells) + f" | {rows[-1]['lift']:.1f} | "
@@ -101,8 +104,8 @@ def _lost(remeshed):
 
 
 def main():
-    args = arguments(__doc__, NAME, "chapter8.md")
-    path = ROOT / "studies" / f"{NAME}.toml"
+    args = arguments(__doc__, STUDIES[0], "chapter8.md", STUDIES)
+    path = ROOT / "studies" / f"{args.study}.toml"
     run_study(path, args)
     study = load_study(path)
     results = [(case, summary, rows, remeshes(args.out / case.name))
@@ -117,7 +120,7 @@ def main():
                          for case, summary, _, _ in results], args.out)
     for figure in study.figures:
         shutil.copy(args.out / f"{figure.name}.png", args.figures / f"{figure.name}.png")
-    write_between_markers(args.page, NAME, text)
+    write_between_markers(args.page, args.study, text)
 
 
 if __name__ == "__main__":
