@@ -4,13 +4,13 @@ in docs/chapter8.md.
 
 Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summary.json,
 curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
-two tables: per element and mesh the draft at each inch of the scene's travel,
-the lift at the end and the draft over the last sixth of the travel (mean, spread and
-slope); and what the travel cost (cells, remeshes and how many of them were smoothed or meshed
-afresh around the poor cells alone, steps, Newton iterations, wall time, a remesh against a
-Newton iteration, the plastic work's change by each transfer, and the draft a fresh, a local
-and a smoothed mesh took off). A case
-that failed (a remesh that could not be made) or was interrupted shows how far it went.
+two tables: per element and mesh the draft at each inch of the scene's travel, the lift at
+the end, the draft over the last sixth of the travel (mean, spread and slope) and over its
+last half (mean and slope: the remeshes cut teeth into the curve); and what the travel cost
+(cells, remeshes and how many of them were smoothed or meshed afresh around the poor cells
+alone, steps, Newton iterations, wall time, a remesh against a Newton iteration, the plastic
+work's change by each transfer, and the draft a fresh, a local and a smoothed mesh took off).
+A case that failed (a remesh that could not be made) or was interrupted shows how far it went.
 Copies the study's figures into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
 import shutil
@@ -18,7 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from soilbin.app.plateau import steady_slope
+from soilbin.app.plateau import steady_force, steady_slope
 from soilbin.app.study import Outcome, draw_figures, load_study
 from soilbin.records.scene import load_scene
 from soilbin.remesh.remesher import FRESH, LOCAL, MOVED
@@ -43,15 +43,17 @@ def drafts(results, scene):
     lines = ["| element | element size [in] | travel [in] (status) | "
              + " | ".join(f"draft at {t:g} in [lb]" for t in travels)
              + " | lift at the end [lb] | draft over the last sixth of the travel [lb] | its spread "
-             "| its slope [lb/in] |",
-             "| --- | --- | --- | " + "--- | " * len(travels) + "--- | --- | --- | --- |"]
+             "| its slope [lb/in] | draft over the last half [lb] | its slope [lb/in] |",
+             "| --- | --- | --- | " + "--- | " * (len(travels) + 6)]
     for case, summary, rows, _ in results:
         cells = [f"{d:.1f}" if (d := at(rows, "force", t)) is not None else "–" for t in travels]
+        records = [SimpleNamespace(**row) for row in rows]
         lines.append(f"| {mesh_of(case, scene)} | {rows[-1]['displacement']:.2f} "
                      f"({summary['status']}) | "
                      + " | ".join(cells) + f" | {rows[-1]['lift']:.1f} | "
                      f"{summary['steady_draft']:.1f} | {100 * summary['steady_spread']:.1f}% | "
-                     f"{steady_slope([SimpleNamespace(**row) for row in rows]):.0f} |")
+                     f"{steady_slope(records):.0f} | {steady_force(records, 0.5):.1f} | "
+                     f"{steady_slope(records, 0.5):.1f} |")
     return "\n".join(lines)
 
 

@@ -257,6 +257,19 @@ def test_the_steady_slope_is_the_rise_left_over_the_last_sixth_of_the_travel():
     assert abs(steady_slope(travel(d, saw))) < 0.01 * 10
 
 
+def test_over_the_last_half_a_plateau_is_the_mean_and_slope_of_that_half():
+    """``fraction``: the same measures over a longer window. A force rising at 3 to 4 then
+    flat at 14: over the last half (4 to 8) its mean is 14 and its slope 0, over the last
+    sixth too; over the last five eighths (3 to 8) the mean takes in the rise from 11 to 14."""
+    records = [StepRecord(0, 0.0, d, f, 1, 0, 0, 0.0, (), {})
+               for d, f in zip([1, 2, 3, 4, 6, 8], [5, 8, 11, 14, 14, 14])]
+    assert steady_force(records, 0.5) == 14.0 and steady_slope(records, 0.5) == pytest.approx(
+        0.0, abs=1e-12)
+    assert steady_force(records, 5 / 8) == pytest.approx((0.5 * (11 + 14) + 4 * 14) / 5,
+                                                         rel=1e-14)
+    assert steady_slope(records, 5 / 8) > 0.0
+
+
 def test_force_control_until_collapse_ends_where_the_travel_runs_away():
     """The same criterion on the applied load ends a force-controlled run at its limit: the
     strip load (100 psi at load factor 1) stops at the 200x step, not at the 50x one."""
