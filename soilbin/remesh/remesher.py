@@ -194,9 +194,11 @@ class Remeshing:
 
     def _mends(self, record):
         """Whether to try keeping part of the old mesh (its cells, nodes moved; else its cells
-        away from the poor ones): where its quality fell below min_quality
-        (:meth:`_transferred` tries it in three dimensions only)."""
-        return record.columns.get("mesh_quality", 1.0) < self.settings.min_quality
+        away from the poor ones): where either is asked for and its quality fell below
+        min_quality (:meth:`_transferred` tries it in three dimensions only)."""
+        settings = self.settings
+        return ((settings.smooth_first or settings.local_first)
+                and record.columns.get("mesh_quality", 1.0) < settings.min_quality)
 
     def _transferred(self, old, step, mend):
         """A new problem on a new mesh of ``old``'s deformed soil, with its state, the seconds
