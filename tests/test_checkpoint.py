@@ -99,8 +99,13 @@ def resume_column(stopped, out, *overrides):
 
 def test_resume_refuses_another_scene(stopped_column, tmp_path):
     with pytest.raises(InputError, match=r"differs from the checkpoint's in materials\.soil\.E "
-                                         r"\(only title, solver, output, headline may change\)"):
+                                         r"\(only title, solver, output, headline, remesh\.retries "
+                                         r"may change\)"):
         resume_column(stopped_column, tmp_path, "materials.soil.E=5000")
+
+
+def test_resume_takes_another_count_of_retries_of_a_failed_remesh(stopped_column, tmp_path):
+    assert resume_column(stopped_column, tmp_path, "remesh.retries=7")["status"] == "complete"
 
 
 def test_resume_refuses_a_folder_without_checkpoint_and_its_own_folder(stopped_column, tmp_path):

@@ -318,6 +318,21 @@ def test_a_surface_is_meshed_by_delaunay_unless_its_tetrahedra_are_below_min_qua
     assert len(cells) != len(mesh_adapt[1]) or not np.array_equal(points, mesh_adapt[0])
 
 
+def test_a_fresh_mesh_with_a_flat_tetrahedron_is_a_failed_remesh(tmp_path, monkeypatch):
+    """Where Delaunay's tetrahedra are below min_quality and MeshAdapt's below
+    :data:`~soilbin.remesh.mesher.FLAT` (here raised to 1: every tetrahedron), the mesher
+    raises (gmsh made a flat one on three collinear nodes of the clay's soil, and the
+    re-equilibration's residual was nan)."""
+    from mpi4py import MPI
+    from soilbin.remesh import mesher
+    monkeypatch.setattr(mesher, "FLAT", 1.0)
+    with pytest.raises(RuntimeError, match=r"holds a flat tetrahedron \(scaled Jacobian 0\.\d+"):
+        mesher.mesh_surface(MPI.COMM_SELF, Surface.of(*refined_box_surface(3)),
+                            cube_sizes(0.3), {"soil": 1}, {f"face{k}": k for k in range(1, 7)},
+                            tmp_path / "flat.msh", 0.99)
+    assert not (tmp_path / "flat.msh").exists()
+
+
 def test_the_fine_cells_at_a_tool_go_with_it(tmp_path):
     """A bar of tetrahedra built fine at the tool (x < 1) and coarse beyond, the tool moved 2
     along x: a cell takes the least of the size built where its soil started and the size
@@ -627,24 +642,54 @@ def test_a_surface_gmsh_cannot_map_ends_the_run_with_its_steps_on_disk(tmp_path,
     def unmappable(dim_tags=()):
         raise Exception("Wrong topology of boundary mesh for parametrization")
     monkeypatch.setattr(gmsh.model.mesh, "createGeometry", unmappable)
-    summary = run_scene(load_scene(SCENES / "block-drucker-prager.toml", BLOCK_3D), tmp_path)
+    summary = run_scene(load_scene(SCENES / "block-drucker-prager.toml",
+                                   BLOCK_3D + ("remesh.retries=0",)), tmp_path)
     assert summary["status"] == "failed" and summary["n_steps"] == 4
     assert "remeshing after step 4 failed: gmsh cannot map" in summary["message"]
     assert "Wrong topology" in summary["message"]
     assert len(curve(tmp_path)) == 4
 
 
-def test_a_remesh_that_fails_ends_the_run_with_its_steps_on_disk(tmp_path, monkeypatch):
-    """gmsh failing on the deformed soil: status failed, the message says where, every
-    converged step and the last good mesh's checkpoint stay."""
+def test_a_remesh_that_fails_again_after_the_retries_ends_the_run_with_its_steps_on_disk(
+        tmp_path, monkeypatch, capsys):
+    """gmsh failing on the deformed soil after step 3 and again after step 4, with
+    ``remesh.retries = 1``: the run goes on on the old mesh once, then stops: status failed,
+    the message says where, every converged step and the last good mesh's checkpoint stay."""
     from soilbin.remesh import remesher
 
     def failing(*args, **kwargs):
         raise RuntimeError("gmsh cannot mesh the deformed soil (a test's failure)")
     monkeypatch.setattr(remesher, "mesh_outline", failing)
-    summary = run_scene(load_scene(SCENES / "strip-footing-penetration.toml", FOOTING), tmp_path)
-    assert summary["status"] == "failed" and summary["n_steps"] == 3
-    assert "remeshing after step 3 failed: gmsh cannot mesh" in summary["message"]
-    assert len(curve(tmp_path)) == 3
+    summary = run_scene(load_scene(SCENES / "strip-footing-penetration.toml",
+                                   FOOTING + ("remesh.retries=1",)), tmp_path)
+    assert summary["status"] == "failed" and summary["n_steps"] == 4
+    assert (summary["remeshes"], summary["remeshes_failed"]) == (0, 2)
+    assert "remeshing after step 4 failed: gmsh cannot mesh" in summary["message"]
+    assert "after step 3 failed: gmsh cannot mesh the deformed soil (a test's failure); the run " \
+           "goes on on the old mesh" in capsys.readouterr().err
+    assert len(curve(tmp_path)) == 4
     assert (tmp_path / "checkpoint" / "state.npz").exists()
     assert not (tmp_path / "remeshes.csv").exists()
+
+
+def test_after_a_remesh_that_failed_the_run_goes_on_and_remeshes_after_the_next_step(
+        tmp_path, monkeypatch):
+    """The re-equilibration after the remesh of step 3 not converging: the run goes on on
+    the old mesh, the mesh made after step 3 is not kept, and the next step's remesh works."""
+    from soilbin.remesh import remesher
+    equilibrated = remesher._equilibrated
+    calls = []
+
+    def first_fails(problem):
+        calls.append(problem)
+        if len(calls) == 1:
+            raise ConvergenceError("a test's failure")
+        return equilibrated(problem)
+    monkeypatch.setattr(remesher, "_equilibrated", first_fails)
+    summary = run_scene(load_scene(SCENES / "strip-footing-penetration.toml", FOOTING), tmp_path)
+    assert summary["status"] == "complete" and summary["remeshes_failed"] == 1
+    with open(tmp_path / "remeshes.csv") as f:
+        steps = [int(row["step"]) for row in csv.DictReader(f)]
+    assert steps[0] == 4 and len(steps) == summary["remeshes"]
+    assert (sorted(p.name for p in (tmp_path / "meshes").iterdir())
+            == [f"remesh-{step:04d}.msh" for step in steps])

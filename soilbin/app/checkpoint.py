@@ -38,8 +38,9 @@ from .interrupt import deferred
 FOLDER = "checkpoint"
 #: The stored arrays' prefix of the remeshing's state.
 REMESH = "remesh"
-#: Scene tables a resumed run may change: how it solves and what it writes and reports.
-FREE = ("title", "solver", "output", "headline")
+#: Scene tables and keys a resumed run may change: how it solves, what it writes and reports,
+#: and how often a remesh that failed is tried again.
+FREE = ("title", "solver", "output", "headline", "remesh.retries")
 #: Tolerance of the same point of the mesh in two runs, relative to the mesh's size (its
 #: coordinates are the same; an interpolated one differs by round-off).
 SAME_MESH = 1e-12
@@ -165,8 +166,8 @@ def _match(stored, local, tolerance):
 
 
 def _differences(old, new, path=""):
-    """Dotted keys whose values differ between two parsed scenes, the free tables left out."""
-    keys = [k for k in sorted(set(old) | set(new)) if path or k not in FREE]
+    """Dotted keys whose values differ between two parsed scenes, the free ones left out."""
+    keys = [k for k in sorted(set(old) | set(new)) if f"{path}{k}" not in FREE]
     out = []
     for key in keys:
         a, b = old.get(key), new.get(key)

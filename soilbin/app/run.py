@@ -162,10 +162,19 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
         if remeshing is not None:
             remeshing.check_folding(stepped.problem, record)
         if remeshing is not None and remeshing.due(record):   # the step ends on the new mesh
-            stepped.problem = remeshing.remesh(stepped.problem, record)
-            remeshed = remeshing.reports[-1]
-            folder.remeshed(stepped.problem, remeshed)
-            checkpoints.remeshed(stepped.problem)
+            try:
+                stepped.problem = remeshing.remesh(stepped.problem, record)
+            except RemeshError as err:
+                if not remeshing.goes_on():
+                    raise
+                if comm.rank == 0:
+                    print(f"soilbin: warning: {err}; the run goes on on the old mesh and tries "
+                          f"again after the next step ({remeshing.failures} failed so far)",
+                          file=sys.stderr)
+            else:
+                remeshed = remeshing.reports[-1]
+                folder.remeshed(stepped.problem, remeshed)
+                checkpoints.remeshed(stepped.problem)
         checkpoints.write(folder.records)
         if comm.rank == 0 and record.step == folded_at_step(folder.records):
             print(f"soilbin: warning: step {record.step}: a cell of the mesh has folded over "
@@ -229,7 +238,8 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
         "cpu_s": round(time.process_time() - start_cpu, 3),
         **headline_results(scene, records, at_limit=status == "collapse"),
         **mesh_quality_results(records),
-        **({} if remeshing is None else {"remeshes": remeshing.count}),
+        **({} if remeshing is None else {"remeshes": remeshing.count,
+                                          "remeshes_failed": remeshing.failures}),
     }
     try:
         estimates = draft_estimates(scene, blade_of(scene, problem))

@@ -301,6 +301,10 @@ class Remesh(Params):
                                         "around its cells below 1.15 min_quality (up to "
                                         "three layers of neighbours), the rest kept, where "
                                         "that lifts it to 1.15 min_quality; else all of it")
+    retries: int = param(3, lo=0, doc="after a remesh that fails (gmsh, the transfer or the "
+                                      "re-equilibration), go on on the old mesh and try again "
+                                      "after each of up to this many steps before the run "
+                                      "stops (0: stop at once)")
 
     @property
     def active(self):

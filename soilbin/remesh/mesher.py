@@ -20,7 +20,8 @@ changes from run to run, and the mesh changes with it), which gmsh maps onto a p
 they close, at the sizes of the background field: by Delaunay (0.05 s for the patches of the
 tine's soil), and again by MeshAdapt (0.46 s) where Delaunay fails or leaves a tetrahedron
 below the scene's ``remesh.min_quality`` or :data:`FRESH_QUALITY` (on the mapped patches of
-the tine's soil Frontal-Delaunay once left hundreds of inverted triangles). gmsh's own
+the tine's soil Frontal-Delaunay once left hundreds of inverted triangles), whose mesh is then
+kept unless it holds a flat tetrahedron (:data:`FLAT`). gmsh's own
 ``classifySurfaces`` does not cut at a group's border where the boundary is flat (the footing
 beside the free surface).
 
@@ -50,6 +51,10 @@ TRIANGLE, TETRAHEDRON = 2, 4
 #: the footing's thin slab (remeshed by count) it once left a sliver of 7e-6, around which
 #: the re-equilibration ran for minutes.
 FRESH_QUALITY = 0.02
+#: The least scaled Jacobian any remesh must pass: below it a tetrahedron is flat (gmsh made
+#: one of 5e-17 on three collinear boundary nodes of the clay's soil after 4.2 in of travel,
+#: by either surface algorithm, and the mean-dilatation pressure of its zero volume was nan).
+FLAT = 1e-6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,7 +106,8 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
     """The TaggedMesh of tetrahedra inside the closed :class:`~.surface.Surface` ``surface``
     (rank 0; None elsewhere), distributed and written to the gmsh file ``path``; ``sizes``,
     ``regions``, ``boundaries`` as :func:`mesh_outline`'s. A Delaunay mesh is kept if its
-    least scaled Jacobian is above ``min_quality`` and :data:`FRESH_QUALITY` (module doc)."""
+    least scaled Jacobian is above ``min_quality`` and :data:`FRESH_QUALITY`, else MeshAdapt's
+    if it is above :data:`FLAT` (module doc)."""
     def model():
         for attempt, algorithm in enumerate((DELAUNAY, MESH_ADAPT)):
             if attempt:
@@ -111,8 +117,12 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
             gmsh.option.setNumber("Mesh.Algorithm", algorithm)
             try:
                 _generate(3)
-                if attempt or _least_quality() > max(min_quality, FRESH_QUALITY):
+                least = _least_quality()
+                if least > max(min_quality, FRESH_QUALITY):
                     break
+                if attempt and least < FLAT:
+                    raise RuntimeError(f"gmsh's mesh of the deformed soil holds a flat "
+                                       f"tetrahedron (scaled Jacobian {least:.2g})")
             except RuntimeError as err:
                 if attempt:
                     folded = surface.folded(boundaries)

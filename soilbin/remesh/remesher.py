@@ -65,6 +65,11 @@ SMOOTHED = 1.15
 FRESH, MOVED, LOCAL = "fresh", "moved", "local"
 
 
+def _mesh_file(step):
+    """The run folder's file of the mesh made after ``step``."""
+    return f"{MESHES}/remesh-{step:04d}.msh"
+
+
 class RemeshError(RuntimeError):
     """A remesh that failed: the mesher, the transfer or the re-equilibration."""
 
@@ -119,6 +124,8 @@ class Remeshing:
         self.settings = scene.remesh
         self.reports = []   # this run's (not those before a resume)
         self.count = 0      # remeshes since the start, a resumed run's before it included
+        self.failures = 0   # remeshes that failed since the start (:meth:`goes_on`)
+        self._in_a_row = 0  # of them since the last that worked
         self._last = 0      # the step of the last remesh
         #: Rank 0: the scene's mesh as built, its cells' corners (n, k, d) and element sizes
         #: (None until the first remesh, which reads them off the mesh it remeshes): a cell
@@ -155,9 +162,11 @@ class Remeshing:
         start = time.perf_counter()
         before = soil_integrals(problem)
         try:
-            new, mesh_s, how = self._transferred(problem, record.step, self._mends(record))
+            new, layout, mesh_s, how = self._transferred(problem, record.step,
+                                                         self._mends(record))
         except (OutlineError, RuntimeError) as err:
-            raise RemeshError(f"remeshing after step {record.step} failed: {err}") from None
+            raise self._failed(problem.comm, record.step,
+                               f"remeshing after step {record.step} failed: {err}") from None
         transferred = soil_integrals(new)
         transfer_s = time.perf_counter() - start - mesh_s
         new.set_load_factor(record.load_factor)
@@ -165,8 +174,9 @@ class Remeshing:
             try:
                 result = _equilibrated(new)
             except ConvergenceError as err:
-                raise RemeshError(f"after remeshing at step {record.step} the soil did not come "
-                                  f"back to equilibrium at the same load ({err})") from None
+                raise self._failed(new.comm, record.step,
+                                   f"after remeshing at step {record.step} the soil did not "
+                                   f"come back to equilibrium at the same load ({err})") from None
         new.commit()
         seen = new.observe()
         scale = new.newton.force_scale or 1.0
@@ -188,9 +198,28 @@ class Remeshing:
             wall_s=time.perf_counter() - start, smoothed=int(how == MOVED),
             local=int(how == LOCAL))
         self.reports.append(report)
+        self.mesh_file, self.layout = _mesh_file(record.step), layout
         self._last = record.step
         self.count += 1
+        self._in_a_row = 0
         return new
+
+    def _failed(self, comm, step, message):
+        """The RemeshError of a remesh after ``step`` that failed, its mesh file (if made)
+        removed: each file in :data:`MESHES` is of a mesh the run went on."""
+        if comm.rank == 0:
+            (self.folder / _mesh_file(step)).unlink(missing_ok=True)
+        return RemeshError(message)
+
+    def goes_on(self):
+        """Whether the run goes on on the old mesh after a remesh that failed (and tries again
+        after the next step): while no more than ``remesh.retries`` have failed since the
+        last that worked. The old mesh is below min_quality, but a step that would take it
+        below half of it is cut (:class:`~soilbin.problem.SoilProblem`), so its cells do
+        not fold."""
+        self.failures += 1
+        self._in_a_row += 1
+        return self._in_a_row <= self.settings.retries
 
     def _mends(self, record):
         """Whether to try keeping part of the old mesh (its cells, nodes moved; else its cells
@@ -201,9 +230,9 @@ class Remeshing:
                 and record.columns.get("mesh_quality", 1.0) < settings.min_quality)
 
     def _transferred(self, old, step, mend):
-        """A new problem on a new mesh of ``old``'s deformed soil, with its state, the seconds
-        the mesh took and how much of the old mesh it kept (:data:`FRESH`, :data:`MOVED` or
-        :data:`LOCAL`). Where ``mend``: the old cells with nodes moved
+        """A new problem on a new mesh of ``old``'s deformed soil, with its state, its
+        cells' layout as made, the seconds the mesh took and how much of the old mesh it kept
+        (:data:`FRESH`, :data:`MOVED` or :data:`LOCAL`). Where ``mend``: the old cells with nodes moved
         (``remesh.smooth_first``), else the old mesh meshed afresh around its poor cells
         alone (``remesh.local_first``); else, or where neither reaches :data:`SMOOTHED`
         min_quality, a fresh mesh."""
@@ -223,7 +252,7 @@ class Remeshing:
             if mend and not planar:
                 kept, how = self._mended(state, boundary, sizes)
         how = comm.bcast(how, root=0)
-        mesh_file = f"{MESHES}/remesh-{step:04d}.msh"
+        mesh_file = _mesh_file(step)
         groups = dict(tagged.regions), dict(tagged.boundaries)
         if planar:
             new_tagged = mesh_outline(comm, boundary, sizes, *groups, element.simplex,
@@ -234,11 +263,10 @@ class Remeshing:
         else:
             new_tagged = mesh_surface(comm, boundary, sizes, *groups, self.folder / mesh_file,
                                       self.settings.min_quality)
-        self.mesh_file = mesh_file
         mesh_s = time.perf_counter() - start
         new = SoilProblem(scene, new_tagged)
         new.newton.on_iterate = old.newton.on_iterate
-        self.layout = new_layout = CellLayout(new)
+        new_layout = CellLayout(new)
         target = new_layout.gather_state(new.state())
         x = new_layout.gather(new_layout.by_cell(POINTS, _point_coordinates(new)))
         new_contact = _contact_points(new)
@@ -252,7 +280,7 @@ class Remeshing:
         new.points.settle_history()
         if element.mixed:
             start_mean_pressure(new.disc, new.points, new.w, new.w_committed)
-        return new, mesh_s, how
+        return new, new_layout, mesh_s, how
 
     def _mended(self, state, surface, sizes):
         """(the nodes, cells and the boundary's triangles and tags of a mesh that keeps what
@@ -314,7 +342,8 @@ class Remeshing:
     # -- checkpoints ------------------------------------------------------------------
     def state(self):
         """What a checkpoint keeps of the remeshing (rank 0's arrays): name -> array."""
-        state = {"last": np.asarray(self._last), "count": np.asarray(self.count)}
+        state = {"last": np.asarray(self._last), "count": np.asarray(self.count),
+                 "failures": np.asarray(self.failures), "in_a_row": np.asarray(self._in_a_row)}
         if self._built is not None:
             state["built_corners"], state["built_sizes"] = self._built
         return state
@@ -323,6 +352,8 @@ class Remeshing:
         """Back to a checkpoint's :meth:`state`, on the mesh of ``mesh_file`` (None: the
         scene's) with its ``layout`` as made."""
         self._last, self.count = int(state["last"]), int(state["count"])
+        self.failures, self._in_a_row = (int(state.get(key, 0)) for key in ("failures",
+                                                                            "in_a_row"))
         self._built = ((state["built_corners"], state["built_sizes"])
                        if "built_corners" in state else None)
         self._built_cells = None
