@@ -206,6 +206,13 @@ def test_resume_without_a_checkpoint_is_one_clear_line(capsys, tmp_path):
     assert "--resume no/such/run: no checkpoint there" in err
 
 
+def test_a_resumed_run_goes_next_to_the_one_it_resumes(capsys, tmp_path):
+    assert run_main(capsys, "run", "column-elastic", "--out", str(tmp_path / "a"))[0] == 0
+    status, _, err = run_main(capsys, "run", "column-elastic", "--resume", str(tmp_path / "a"))
+    assert status == 0 and f"results in {tmp_path / 'a-resumed'} (resumed after step" in err
+    assert json.loads((tmp_path / "a-resumed" / "summary.json").read_text())["resumed_from"]
+
+
 def test_verbose_prints_every_newton_iterate(capsys, tmp_path):
     """-v: a line per iterate, the first (iteration 0) before any correction, then each step's
     line; the last iterate of a step is below its target."""

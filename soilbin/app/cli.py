@@ -23,7 +23,7 @@ examples:
   soilbin run scenes/strip-footing-von-mises.toml
   soilbin run column-elastic --set materials.soil.E=5000 --set loading.magnitude=20
   soilbin run block-drucker-prager --json --out /tmp/block
-  soilbin run tine-2in-90deg --resume runs/tine-2in-90deg --out runs/tine-resumed
+  soilbin run tine-2in-90deg --resume runs/tine-2in-90deg
 
 exit status: 0 done (with loading.until_collapse = true a force-controlled run
 that stops at the soil's limit counts as done: status "collapse", at the first
@@ -72,7 +72,8 @@ def _parser(point_details=True):
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a scene value, e.g. materials.soil.E=5000 (repeatable); "
                           "checked like the file")
-    run.add_argument("--out", type=folder, help="run folder (default: runs/<scene name>)")
+    run.add_argument("--out", type=folder, help="run folder (default: runs/<scene name>, or "
+                                                "FOLDER-resumed with --resume FOLDER)")
     run.add_argument("--json", action="store_true",
                      help="no progress lines; the last stdout line is the summary as one JSON object")
     run.add_argument("-v", "--verbose", action="store_true",
@@ -82,7 +83,8 @@ def _parser(point_details=True):
     run.add_argument("--resume", type=folder, metavar="FOLDER",
                      help="go on from the last converged step of the stopped run in FOLDER (its "
                           "checkpoint/; the same scene but for [solver], [output] and "
-                          "[headline], any number of ranks); the new --out starts with its steps")
+                          "[headline] and remesh.retries, any number of ranks); the new --out starts with "
+                          "its steps")
 
     sub.add_parser("list", help="list the scenes in scenes/ with their titles",
                    description="List the scenes shipped in the project's scenes/ folder.")
@@ -293,7 +295,8 @@ def _run(args):
         from .run import run_scene
 
     scene = load_scene(scene_path(args.scene), args.overrides)
-    out = args.out or Path("runs") / scene.name
+    out = args.out or (Path(f"{args.resume}-resumed") if args.resume
+                       else Path("runs") / scene.name)
     comm = MPI.COMM_WORLD
     rank0 = comm.rank == 0
     try:
