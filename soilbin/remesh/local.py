@@ -10,8 +10,8 @@ cells stay as they are (the new cells meet the old conformingly); its faces on t
 boundary stay too, but for the patches that hold a face of a cell below the target, which
 gmsh meshes afresh (a cell is often poor by its boundary triangle). Each blob of the cavity
 (its cells joined through faces) is meshed on its own. gmsh's Delaunay tetrahedra of a cavity
-leave slivers between its fixed nodes (0.014-0.02 around the tine's
-blade), so the whole mesh is then smoothed as :mod:`.smoothing` smooths the old one. The kept
+leave slivers between its fixed nodes (0.014-0.02 around the tine's blade), so the whole
+mesh is then smoothed as :mod:`.smoothing` smooths the old one. The kept
 cells whose nodes did not move keep their Gauss points, where the transfer's cell-wise fit
 gives back each value as it was.
 """

@@ -232,10 +232,10 @@ class Remeshing:
     def _transferred(self, old, step, mend):
         """A new problem on a new mesh of ``old``'s deformed soil, with its state, its
         cells' layout as made, the seconds the mesh took and how much of the old mesh it kept
-        (:data:`FRESH`, :data:`MOVED` or :data:`LOCAL`). Where ``mend``: the old cells with nodes moved
-        (``remesh.smooth_first``), else the old mesh meshed afresh around its poor cells
-        alone (``remesh.local_first``); else, or where neither reaches :data:`SMOOTHED`
-        min_quality, a fresh mesh."""
+        (:data:`FRESH`, :data:`MOVED` or :data:`LOCAL`). Where ``mend``: the old cells with
+        nodes moved (``remesh.smooth_first``), else the old mesh meshed afresh around its poor
+        cells alone (``remesh.local_first``); else, or where neither reaches
+        :data:`SMOOTHED` min_quality, a fresh mesh."""
         start = time.perf_counter()
         comm, tagged, scene = old.comm, old.tagged, self.scene
         element = old.disc.element
