@@ -105,39 +105,3 @@ def test_a_fresh_patch_that_makes_a_triangle_as_it_was_bounds_the_mesh_once():
     assert len(new_triangles) == len(triangles)
     assert np.array_equal(np.bincount(new_tags), np.bincount(tags))
     assert _conforming(new_cells, new_triangles, len(new_points))
-
-
-def shells(surface):
-    """How many pieces a surface falls into, its triangles joined through edges."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    _, first, second = surface.shared_edges()
-    m = len(surface.triangles)
-    return connected_components(coo_matrix((np.ones(len(first)), (first, second)), (m, m)))[0]
-
-
-def test_a_cavity_in_two_blobs_is_meshed_blob_by_blob_in_its_first_layer(monkeypatch):
-    """Two nodes of the 8 x 8 x 8 Kuhn cube pushed toward faces at opposite corners make a
-    cavity of two blobs: gmsh meshes each on its own (one volume of two shells, gmsh's
-    Delaunay left the tine's soil no tetrahedron), at the first layer, so every cell that
-    shares no node with a cell around the poor ones stays as it was."""
-    from soilbin.remesh import local
-    meshed = []
-
-    def mesh_cavity(surface, *args):
-        meshed.append(shells(surface))
-        return local_mesh_cavity(surface, *args)
-    local_mesh_cavity = local.mesh_cavity
-    monkeypatch.setattr(local, "mesh_cavity", mesh_cavity)
-    points, cells, triangles, tags = kuhn_cube(8)
-    best = quality(points, cells).min()
-    for node in ([2, 2, 2], [6, 6, 6]):
-        index = np.flatnonzero((points == np.array(node) / 8).all(axis=1))[0]
-        points[index, 2] -= 0.09
-    target = 0.3 * best
-    poor = quality(points, cells) < target
-    cavity = np.isin(cells, cells[poor]).any(axis=1)
-    new_points, new_cells, _, _ = remeshed_cube(points, cells, triangles, tags, target)
-    assert meshed == [1, 1]
-    beyond = ~np.isin(cells, cells[cavity]).any(axis=1)
-    assert rows(points, cells[beyond]) <= rows(new_points, new_cells)

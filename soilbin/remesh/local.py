@@ -8,16 +8,13 @@ the target and the cells that share a node with them, grown by such layers up to
 :data:`LAYERS` times until the mesh reaches the target. The cavity's faces against the kept
 cells stay as they are (the new cells meet the old conformingly); its faces on the soil's
 boundary stay too, but for the patches that hold a face of a cell below the target, which
-gmsh meshes afresh (a cell is often poor by its boundary triangle). Each blob of the cavity
-(its cells joined through faces) is meshed on its own. gmsh's Delaunay tetrahedra of a cavity
-leave slivers between its fixed nodes (0.014-0.02 around the tine's blade), so the whole
-mesh is then smoothed as :mod:`.smoothing` smooths the old one. The kept
+gmsh meshes afresh (a cell is often poor by its boundary triangle). gmsh's Delaunay
+tetrahedra of a cavity leave slivers between its fixed nodes (0.014-0.02 around the tine's
+blade), so the whole mesh is then smoothed as :mod:`.smoothing` smooths the old one. The kept
 cells whose nodes did not move keep their Gauss points, where the transfer's cell-wise fit
 gives back each value as it was.
 """
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..problem.mesh_quality import simplex_quality
 from .mesher import mesh_cavity
@@ -48,66 +45,21 @@ def remeshed_around(points, cells, triangles, tags, sizes, target):
     cavity = quality < target
     for _ in range(LAYERS):
         cavity = np.isin(cells, cells[cavity]).any(axis=1)
-        meshed = _cavity_meshed(points, cells[cavity], triangles, tags, boundary, poor_faces,
-                                sizes)
-        if meshed is None:
+        try:
+            surface, keep, on_boundary = _cavity_surface(points, cells[cavity], triangles,
+                                                         tags, boundary, poor_faces)
+        except OutlineError:   # the cavity's boundary is not a closed 2-manifold
             continue
-        mesh = _merged(points, cells[~cavity], triangles, tags, *meshed)
+        fresh = mesh_cavity(surface, sizes, keep, CAVITY_QUALITY)
+        if fresh is None:
+            continue
+        mesh = _merged(points, cells[~cavity], triangles, tags, surface, on_boundary, fresh)
         if not _conforming(*mesh[1:3], len(mesh[0])):
             continue
         moved, least = smoothed(*mesh, target)
         if least >= target:
             return (moved, *mesh[1:])
     return None
-
-
-def _cavity_meshed(points, cavity, triangles, tags, boundary, poor_faces, sizes):
-    """(the :class:`~.surface.Surface` of the ``cavity``'s cells, the mask of its triangles on
-    the soil's boundary, the fresh mesh of :func:`~.mesher.mesh_cavity`), each blob of the
-    cavity (its cells joined through faces) meshed on its own: gmsh's Delaunay leaves no
-    tetrahedron in one volume bounded by two shells (the tine's blade, where poor cells sit
-    at both its edges). None where a blob's boundary is not a closed 2-manifold or gmsh fails
-    (the arguments as :func:`_cavity_surface`'s)."""
-    blobs = []
-    for blob in _blobs(cavity, len(points)):
-        try:
-            surface, keep, on_boundary = _cavity_surface(points, cavity[blob], triangles,
-                                                         tags, boundary, poor_faces)
-        except OutlineError:
-            return None
-        fresh = mesh_cavity(surface, sizes, keep, CAVITY_QUALITY)
-        if fresh is None:
-            return None
-        blobs.append((surface, on_boundary, fresh))
-    return _joined(blobs)
-
-
-def _blobs(cells, n):
-    """The ``cells`` (m, 4) into ``n`` points parted into blobs joined through faces: a list
-    of index arrays."""
-    key = _keys(np.sort(cells[:, FACES].reshape(-1, 3), axis=1), n)
-    order = np.argsort(key, kind="stable")
-    owner = order // 4
-    shared = key[order][1:] == key[order][:-1]
-    graph = coo_matrix((np.ones(shared.sum()), (owner[:-1][shared], owner[1:][shared])),
-                       shape=(len(cells), len(cells)))
-    label = connected_components(graph, directed=False)[1]
-    return [np.flatnonzero(label == k) for k in range(label.max() + 1)]
-
-
-def _joined(blobs):
-    """One (surface, on_boundary, fresh mesh) of the blobs' (:func:`_cavity_meshed`), their
-    points listed one blob after the other."""
-    surfaces, on_boundary, fresh = zip(*blobs)
-    surface_offsets = np.cumsum([0] + [len(s.points) for s in surfaces])
-    fresh_offsets = np.cumsum([0] + [len(f[0]) for f in fresh])
-    surface = Surface(np.concatenate([s.points for s in surfaces]),
-                      np.concatenate([s.triangles + o for s, o in zip(surfaces, surface_offsets)]),
-                      np.concatenate([s.tags for s in surfaces]))
-    mesh = (np.concatenate([f[0] for f in fresh]),
-            *(np.concatenate([f[k] + o for f, o in zip(fresh, fresh_offsets)]) for k in (1, 2)),
-            np.concatenate([f[3] for f in fresh]))
-    return surface, np.concatenate(on_boundary), mesh
 
 
 def _cavity_surface(points, cavity, triangles, tags, boundary, poor_faces):
