@@ -319,6 +319,25 @@ def test_a_remeshing_run_repeats_itself_to_the_bit_in_another_process(tmp_path):
     assert all(a.read_bytes() == b.read_bytes() for a, b in zip(*meshes))
 
 
+def test_the_sections_after_a_remesh_are_drawn_from_the_soil_on_the_new_mesh(tmp_path,
+                                                                             monkeypatch):
+    """The sections at a stop of ``output.at`` after a remesh show the soil where the tool now
+    is (they were drawn from the problem on the scene's mesh, as it was at the first remesh)."""
+    from soilbin.app import section_figures
+    drawn = []
+    monkeypatch.setattr(section_figures, "sections_png",
+                        lambda problem, scene, load, path: drawn.append(
+                            (load, problem.tool.travel, problem.mesh)))
+    summary = run_scene(load_scene(SCENES / "tine-2in-long-clay.toml", [
+        "mesh.element_size=1.5", "loading.magnitude=0.1", "loading.steps=4", "remesh.every=2",
+        "output.at=[0.05, 0.1]"]), tmp_path)
+    assert summary["status"] == "complete" and summary["remeshes"] >= 2
+    (first, first_travel, first_mesh), (last, last_travel, last_mesh) = drawn
+    assert (first, last) == (0.05, 0.1)
+    assert first_travel == pytest.approx(0.05) and last_travel == pytest.approx(0.1)
+    assert last_mesh is not first_mesh
+
+
 def test_a_surface_is_meshed_by_delaunay_unless_its_tetrahedra_are_below_min_quality(
         tmp_path, monkeypatch):
     """The patches are meshed by Delaunay (ten times faster than MeshAdapt on the tine's

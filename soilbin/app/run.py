@@ -1,5 +1,6 @@
 """Run a scene: mesh, problem, load stepping, outputs and the summary."""
 import dataclasses
+import gc
 import shutil
 import sys
 import time
@@ -162,8 +163,9 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
         if remeshing is not None:
             remeshing.check_folding(stepped.problem, record)
         if remeshing is not None and remeshing.due(record):   # the step ends on the new mesh
+            old = stepped.problem
             try:
-                stepped.problem = remeshing.remesh(stepped.problem, record)
+                stepped.problem = remeshing.remesh(old, record)
             except RemeshError as err:
                 if not remeshing.goes_on():
                     raise
@@ -172,9 +174,15 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
                           f"again after the next step ({remeshing.failures} failed so far)",
                           file=sys.stderr)
             else:
+                old.destroy()
                 remeshed = remeshing.reports[-1]
                 folder.remeshed(stepped.problem, remeshed)
                 checkpoints.remeshed(stepped.problem)
+            finally:
+                # the rest of the problem a remesh replaced (or made and gave up), held in
+                # reference cycles that Python's full collection reaches seldom: without
+                # this and the destroy, the clay's 0.5-in mesh held 11.6 GB after 64 remeshes
+                gc.collect()
         checkpoints.write(folder.records)
         if comm.rank == 0 and record.step == folded_at_step(folder.records):
             print(f"soilbin: warning: step {record.step}: a cell of the mesh has folded over "
@@ -183,7 +191,8 @@ def _run(scene, out_dir, comm, progress, overrides, resume, iterate_progress, re
                   file=sys.stderr)
         if sections and any(abs(record.load_factor - s) < 1e-9 for s in stops):
             load = record.load_factor * scene.loading.magnitude
-            section_figures.sections_png(problem, scene, load, out_dir / f"sections-{load:g}.png")
+            section_figures.sections_png(stepped.problem, scene, load,
+                                         out_dir / f"sections-{load:g}.png")
         if progress is not None:
             progress(record)
         if remeshed is not None and remesh_progress is not None:

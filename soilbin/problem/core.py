@@ -157,6 +157,11 @@ class SoilProblem:
                                        f"{quality:.3g}, below half remesh.min_quality")
         return result
 
+    def destroy(self):
+        """Frees the solver's matrix, MUMPS's factors and vectors: a problem a remesh replaced
+        (or made and gave up); not to be used after."""
+        self.newton.destroy()
+
     def commit(self):
         self._factors = (self._factor, self._factors[0])
         if self.border is not None:

@@ -174,6 +174,7 @@ class Remeshing:
             try:
                 result = _equilibrated(new)
             except ConvergenceError as err:
+                new.destroy()
                 raise self._failed(new.comm, record.step,
                                    f"after remeshing at step {record.step} the soil did not "
                                    f"come back to equilibrium at the same load ({err})") from None
@@ -270,11 +271,18 @@ class Remeshing:
         target = new_layout.gather_state(new.state())
         x = new_layout.gather(new_layout.by_cell(POINTS, _point_coordinates(new)))
         new_contact = _contact_points(new)
+        failure = None
         if comm.rank == 0:
             _transfer(state, target, samples, x, element)
             if contact is not None:
-                _transfer_contact(state, target, contact, new_contact)
-        target = comm.bcast(target, root=0)
+                try:
+                    _transfer_contact(state, target, contact, new_contact)
+                except RuntimeError as err:
+                    failure = str(err)
+        target, failure = comm.bcast((target, failure), root=0)
+        if failure is not None:
+            new.destroy()
+            raise RuntimeError(failure)
         new.restore({name: values if kind == GLOBAL else new_layout.local(kind, values)
                      for name, (kind, values) in target.items()})
         new.points.settle_history()

@@ -19,6 +19,8 @@ import numpy as np
 from dolfinx import fem
 from petsc4py import PETSc
 
+from .resources import release
+
 
 def _rigid_motions(x):
     """The rigid-body motions at the points x (n, d): d translations, then the rotations
@@ -65,6 +67,9 @@ class Uncondensed:
     def solve(ksp, rhs, x):
         ksp.solve(rhs, x)
 
+    def destroy(self):
+        release(self._nullspace)
+
 
 class CellCondensation:
     """The B-bar displacement system of a mixed system with P0 cell fields (see the module
@@ -101,6 +106,7 @@ class CellCondensation:
             to_global(cell_fields.ravel().astype(np.int32)).astype(PETSc.IntType), comm=comm)
         self._n_cells = n_cells
         self._S = self._Z = self._Zr = self._D = self._Dinv = None
+        self._x_u = self._f = self._x_c = self._r_c = None
         self._nullspace = None
 
     def condense(self, A):
@@ -120,6 +126,10 @@ class CellCondensation:
             self._x_u, self._f = self._S.createVecs()
             self._x_c, self._r_c = self._D.createVecs()
         return self._S
+
+    def destroy(self):
+        release(self.is_u, self.is_c, self._S, self._Z, self._Zr, self._D, self._Dinv,
+                self._nullspace, self._x_u, self._f, self._x_c, self._r_c)
 
     def _invert_cell_blocks(self):
         """D⁻¹ from the 2x2 blocks of D (rows and columns ordered θ_K, p_K per owned cell)."""

@@ -42,6 +42,7 @@ from ..errors import ConvergenceError, InputError
 from ..models.base import blocks_symmetric
 from ..records.scene import LinearSolverKind
 from .condensation import CellCondensation, Uncondensed
+from .resources import release
 
 #: Above this many unknowns ``auto`` takes the block low-rank LU: with it the tine in cap
 #: soil converges its whole travel on 134 045 unknowns and its steps on 1 036 591, where
@@ -156,6 +157,12 @@ class LinearSolver:
             return "MUMPS BLR LU" + (f" ({self._condensed.description})"
                                      if self._condensed is not None else "")
         return f"GMRES + GAMG ({self._condensed.description})"
+
+    def destroy(self):
+        """Frees the KSPs (MUMPS's factors with them) and the condensation's objects."""
+        release(self._lu, self._ksp)
+        if self._condensed is not None:
+            self._condensed.destroy()
 
     def set_operator(self, A, symmetric_tangent):
         """Factorise (or set up the preconditioner for) this iterate's matrix;

@@ -45,6 +45,7 @@ from ..errors import ConvergenceError, ReturnMapError
 from ..records.scene import LineSearch
 from .assembly import ElementAssembler
 from .linear_solver import LinearSolver, LinearSolveError
+from .resources import release
 
 
 class NewtonFailure(ConvergenceError):
@@ -142,6 +143,14 @@ class NewtonSolver:
             self._border_b, self._border_c = w.vector.duplicate(), w.vector.duplicate()
             self._border_z = w.vector.duplicate()
             self._border_g = 0.0   # the border's equation at the last residual
+
+    def destroy(self):
+        """Frees its PETSc objects (module :mod:`.resources`); not to be used after."""
+        border = (() if self._border is None else
+                  (self._border_b, self._border_c, self._border_z))
+        release(self._b, self.matrix, self._dx, self._gap, self._equations, self._on_equations,
+                self._held, *border)
+        self.linear.destroy()
 
     def include_force_scale(self, norm):
         """Make the residual floor relative to at least this force norm (e.g. of dead loads)."""
