@@ -638,6 +638,27 @@ def test_remeshing_onto_the_same_mesh_changes_nothing(tmp_path, monkeypatch):
                                                                 rel=1e-3)
 
 
+def test_a_problem_a_remesh_replaced_frees_its_matrix_and_factors(tmp_path, monkeypatch):
+    """Python's collection left a replaced problem's matrix and MUMPS's factors in memory (90
+    MB a remesh on the tine's 1-in mesh); the run destroys them, and the problem it goes on
+    with keeps its own."""
+    from soilbin.remesh.remesher import Remeshing
+    problems = []
+    remesh = Remeshing.remesh
+
+    def recorded(self, problem, record):
+        problems.append(remesh(self, problem, record))
+        return problems[-1]
+    monkeypatch.setattr(Remeshing, "remesh", recorded)
+    summary = run_scene(load_scene(SCENES / "strip-footing-penetration.toml", FOOTING), tmp_path)
+    assert summary["remeshes"] == len(problems) >= 2
+
+    def handles(problem):
+        return problem.newton.matrix.handle, problem.newton.linear._lu.handle
+    assert all(handle == 0 for problem in problems[:-1] for handle in handles(problem))
+    assert all(handle != 0 for handle in handles(problems[-1]))
+
+
 def test_each_mesh_is_a_grid_of_fields_xdmf_and_a_gmsh_file(tmp_path):
     summary = run_scene(load_scene(SCENES / "strip-footing-penetration.toml",
                                    [*FOOTING, "output.every=1"]), tmp_path)
