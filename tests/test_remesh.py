@@ -363,6 +363,34 @@ def test_a_surface_is_meshed_by_delaunay_unless_its_tetrahedra_are_below_min_qua
     assert len(cells) != len(mesh_adapt[1]) or not np.array_equal(points, mesh_adapt[0])
 
 
+def test_where_gmsh_fails_on_the_patches_they_are_cut_again_at_a_wider_fold(tmp_path,
+                                                                            monkeypatch):
+    """A fresh mesh whose patches cut at CREASE gmsh cannot mesh (the clay's heap beside the
+    blade: two patches that overlapped once meshed afresh) is made of patches cut at
+    WIDE_CREASE; where that fails too, the run hears why."""
+    from mpi4py import MPI
+    from soilbin.remesh import mesher
+    tried = []
+    tetrahedra = mesher._tetrahedra
+
+    def failing_at(*creases):
+        def attempt(*args):
+            tried.append(args[-1])
+            if args[-1] in creases:
+                raise RuntimeError(f"gmsh cannot mesh the patches cut at {args[-1]:.2f}")
+            return tetrahedra(*args)
+        return attempt
+    surface, groups = Surface.of(*refined_box_surface(3)), {f"face{k}": k for k in range(1, 7)}
+    monkeypatch.setattr(mesher, "_tetrahedra", failing_at(mesher.CREASE))
+    tagged = mesher.mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1}, groups,
+                                 tmp_path / "wide.msh")
+    assert tried == [mesher.CREASE, mesher.WIDE_CREASE] and tagged.mesh.topology.dim == 3
+    monkeypatch.setattr(mesher, "_tetrahedra", failing_at(mesher.CREASE, mesher.WIDE_CREASE))
+    with pytest.raises(RuntimeError, match=f"cut at {mesher.WIDE_CREASE:.2f}"):
+        mesher.mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1}, groups,
+                            tmp_path / "none.msh")
+
+
 def test_a_fresh_mesh_with_a_flat_tetrahedron_is_a_failed_remesh(tmp_path, monkeypatch):
     """Where Delaunay's tetrahedra are below min_quality and MeshAdapt's below
     :data:`~soilbin.remesh.mesher.FLAT` (here raised to 1: every tetrahedron), the mesher

@@ -21,7 +21,8 @@ they close, at the sizes of the background field: by Delaunay (0.05 s for the pa
 tine's soil), and again by MeshAdapt (0.46 s) where Delaunay fails or leaves a tetrahedron
 below the scene's ``remesh.min_quality`` or :data:`FRESH_QUALITY` (on the mapped patches of
 the tine's soil Frontal-Delaunay once left hundreds of inverted triangles), whose mesh is then
-kept unless it holds a flat tetrahedron (:data:`FLAT`). gmsh's own
+kept unless it holds a flat tetrahedron (:data:`FLAT`); where neither is kept, both again on
+patches cut only at folds of more than :data:`WIDE_CREASE`. gmsh's own
 ``classifySurfaces`` does not cut at a group's border where the boundary is flat (the footing
 beside the free surface).
 
@@ -41,6 +42,11 @@ from ..problem.mesh_quality import simplex_quality
 
 #: Where the boundary folds by more than this (radians), gmsh cuts it into patches.
 CREASE = math.radians(40.0)
+#: The fold a fresh mesh's patches are cut at where gmsh fails on those cut at
+#: :data:`CREASE`: the clay's heap beside the blade, a patch of 17 triangles cut from the
+#: free surface by a fold of 40-50 degrees, overlapped it once both were meshed afresh (the
+#: 0.35-in mesh at 2.03 in of travel; at 60 degrees the two are one patch, which gmsh meshes).
+WIDE_CREASE = math.radians(60.0)
 
 #: gmsh's surface algorithms for the patches of a 3D remesh, in the order tried (module doc).
 DELAUNAY, MESH_ADAPT = 5, 1
@@ -107,31 +113,42 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
     (rank 0; None elsewhere), distributed and written to the gmsh file ``path``; ``sizes``,
     ``regions``, ``boundaries`` as :func:`mesh_outline`'s. A Delaunay mesh is kept if its
     least scaled Jacobian is above ``min_quality`` and :data:`FRESH_QUALITY`, else MeshAdapt's
-    if it is above :data:`FLAT` (module doc)."""
+    if it is above :data:`FLAT`; where neither is, both again with the boundary cut into
+    patches at :data:`WIDE_CREASE` (module doc)."""
     def model():
-        for attempt, algorithm in enumerate((DELAUNAY, MESH_ADAPT)):
-            if attempt:
-                gmsh.model.remove()
-                gmsh.view.remove(view)
-            view, groups, _ = _surface_model(surface, sizes, regions, boundaries)
-            gmsh.option.setNumber("Mesh.Algorithm", algorithm)
-            try:
-                _generate(3)
-                least = _least_quality()
-                if least > max(min_quality, FRESH_QUALITY):
-                    break
-                if attempt and least < FLAT:
-                    raise RuntimeError(f"gmsh's mesh of the deformed soil holds a flat "
-                                       f"tetrahedron (scaled Jacobian {least:.2g})")
-            except RuntimeError as err:
-                if attempt:
-                    folded = surface.folded(boundaries)
-                    raise RuntimeError(f"{err}{patch_groups(str(err), groups, boundaries)}"
-                                       f"{folded and ': ' + folded}") from None
+        try:
+            _tetrahedra(surface, sizes, regions, boundaries, min_quality, CREASE)
+        except RuntimeError:
+            gmsh.clear()
+            _tetrahedra(surface, sizes, regions, boundaries, min_quality, WIDE_CREASE)
         check_cells(RuntimeError, "the remesher made", 3, True)
         _write(path)
         return regions, dict(boundaries)
     return distribute(comm, "remesh", model, dimension=3)
+
+
+def _tetrahedra(surface, sizes, regions, boundaries, min_quality, crease):
+    """The gmsh model of :func:`mesh_surface`'s tetrahedra, the boundary cut into patches
+    at folds of more than ``crease``; RuntimeError where gmsh fails on them."""
+    for attempt, algorithm in enumerate((DELAUNAY, MESH_ADAPT)):
+        if attempt:
+            gmsh.model.remove()
+            gmsh.view.remove(view)
+        view, groups, _ = _surface_model(surface, sizes, regions, boundaries, crease=crease)
+        gmsh.option.setNumber("Mesh.Algorithm", algorithm)
+        try:
+            _generate(3)
+            least = _least_quality()
+            if least > max(min_quality, FRESH_QUALITY):
+                return
+            if attempt and least < FLAT:
+                raise RuntimeError(f"gmsh's mesh of the deformed soil holds a flat "
+                                   f"tetrahedron (scaled Jacobian {least:.2g})")
+        except RuntimeError as err:
+            if attempt:
+                folded = surface.folded(boundaries)
+                raise RuntimeError(f"{err}{patch_groups(str(err), groups, boundaries)}"
+                                   f"{folded and ': ' + folded}") from None
 
 
 def mesh_cells(comm, points, cells, triangles, tags, regions, boundaries, path):
@@ -209,13 +226,13 @@ def patch_groups(message, groups, boundaries):
             + "".join(f", {patch} of {group}" for patch, group in rest))
 
 
-def _surface_model(surface, sizes, regions, boundaries, keep=None):
+def _surface_model(surface, sizes, regions, boundaries, keep=None, crease=CREASE):
     """The gmsh model of the volume inside ``surface``, its groups and its background size,
-    ready to mesh, the patches made of the triangles ``keep`` (a mask, or None) alone
-    keeping theirs; returns the size's view, each patch's (gmsh surface's) facet group tag
-    and the set of the patches kept."""
+    ready to mesh, the boundary cut into patches at folds of more than ``crease``, those made
+    of the triangles ``keep`` (a mask, or None) alone keeping theirs; returns the size's
+    view, each patch's (gmsh surface's) facet group tag and the set of the patches kept."""
     gmsh.model.add("remesh")
-    groups, kept = _discrete_model(surface, keep)
+    groups, kept = _discrete_model(surface, keep, crease)
     fresh = [(2, patch) for patch in groups if patch not in kept]
     around = {abs(curve) for _, curve in gmsh.model.getBoundary([(2, p) for p in kept],
                                                                  oriented=False)}
@@ -242,14 +259,15 @@ def _surface_model(surface, sizes, regions, boundaries, keep=None):
     return _size_field(sizes), groups, kept
 
 
-def _discrete_model(surface, keep=None):
+def _discrete_model(surface, keep, crease):
     """The surface as gmsh's discrete entities, numbered in the order of its own
     :meth:`~.surface.Surface.borders` (gmsh's ``createTopology`` numbers them differently from
-    run to run): a point per corner, a curve per border, a surface per patch, each holding
-    its nodes and elements. Returns each surface entity's facet group tag and the set of
-    those made of the triangles ``keep`` (a mask, or None: none) alone."""
+    run to run): a point per corner, a curve per border, a surface per patch (cut at folds
+    of more than ``crease``), each holding its nodes and elements. Returns each surface
+    entity's facet group tag and the set of those made of the triangles ``keep`` (a mask, or
+    None: none) alone."""
     model, mesh = gmsh.model, gmsh.model.mesh
-    patch_of = surface.patches(CREASE)
+    patch_of = surface.patches(crease)
     borders = surface.borders(patch_of)
     corner = {int(c): model.addDiscreteEntity(0) for c in borders.corners}
     curves = [model.addDiscreteEntity(1, -1, [corner[c[0]], corner[c[-1]]])
