@@ -1,6 +1,7 @@
 """The 2-in tool's long travel against the mesh: studies/tine-long-travel.toml (the cap soil)
-or, with --study tine-long-clay, studies/tine-long-clay.toml (the undrained clay); their tables
-in docs/chapter8.md.
+or, with --study tine-long-clay, studies/tine-long-clay.toml (the undrained clay), or with
+--study tine-long-clay-paths, studies/tine-long-clay-paths.toml (the clay along three paths of
+remeshes on two meshes); their tables in docs/chapter8.md.
 
 Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summary.json,
 curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
@@ -10,7 +11,8 @@ last half (mean and slope: the remeshes cut teeth into the curve); and what the 
 (cells, remeshes and how many of them were smoothed or meshed afresh around the poor cells
 alone, steps, Newton iterations, wall time, a remesh against a Newton iteration, the plastic
 work's change by each transfer, and the draft a fresh, a local and a smoothed mesh took off).
-A case that failed (a remesh that could not be made) or was interrupted shows how far it went.
+A case that failed (a remesh that could not be made) or was interrupted shows how far it went,
+and each case how many of its remeshes failed (each tried again after the next step).
 Copies the study's figures into docs/figures (--figures DIR). Loads in lb, travel in in.
 """
 import shutil
@@ -25,17 +27,21 @@ from soilbin.remesh.remesher import FRESH, LOCAL, MOVED
 from doc_tables import ROOT, write_between_markers
 from study_tables import arguments, at, finished, remeshes, run_study
 
-STUDIES = ("tine-long-travel", "tine-long-clay")
+STUDIES = ("tine-long-travel", "tine-long-clay", "tine-long-clay-paths")
 SIZE = "mesh.element_size"
 ELEMENT = "analysis.element"
 
 
 def mesh_of(case, scene):
-    """'element | element size' of a case, the scene's own marked."""
+    """'element | element size' of a case, the scene's own marked, and what else the case
+    sets (the threshold of a remesh, say)."""
     element = case.values.get(ELEMENT, scene.analysis.element.value)
     size = case.values.get(SIZE, scene.mesh.element_size)
     own = element == scene.analysis.element.value and size == scene.mesh.element_size
-    return f"`{element}` | {size:g}" + (" (the scene's)" if own else "")
+    others = [f"`{key} = {value:g}`" for key, value in case.values.items()
+              if key not in (ELEMENT, SIZE)]
+    return (f"`{element}` | {size:g}" + (" (the scene's)" if own else "")
+            + "".join(f", {other}" for other in others))
 
 
 def drafts(results, scene):
@@ -49,7 +55,7 @@ def drafts(results, scene):
         cells = [f"{d:.1f}" if (d := at(rows, "force", t)) is not None else "–" for t in travels]
         records = [SimpleNamespace(**row) for row in rows]
         lines.append(f"| {mesh_of(case, scene)} | {rows[-1]['displacement']:.2f} "
-                     f"({summary['status']}) | "
+                     f"({_status(summary)}) | "
                      + " | ".join(cells) + f" | {rows[-1]['lift']:.1f} | "
                      f"{summary['steady_draft']:.1f} | {100 * summary['steady_spread']:.1f}% | "
                      f"{steady_slope(records):.0f} | {steady_force(records, 0.5):.1f} | "
@@ -88,6 +94,13 @@ def costs(results, scene):
                      f"({summary['failed_newton_iterations']}) | {summary['wall_s'] / 60:.0f} | "
                      f"{per_iteration:.2f} | {remesh} | {equilibrium} | {work} | {lost} |")
     return "\n".join(lines)
+
+
+def _status(summary):
+    """A run's status and how many of its remeshes failed (each tried again after the next
+    step), where any did."""
+    failed = summary.get("remeshes_failed", 0)
+    return summary["status"] + (f"; {failed} remesh{'es' * (failed > 1)} failed" if failed else "")
 
 
 def _kept(remesh):
