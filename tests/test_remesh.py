@@ -363,11 +363,11 @@ def test_a_surface_is_meshed_by_delaunay_unless_its_tetrahedra_are_below_min_qua
     assert len(cells) != len(mesh_adapt[1]) or not np.array_equal(points, mesh_adapt[0])
 
 
-def test_where_gmsh_fails_on_the_patches_they_are_cut_again_at_a_wider_fold(tmp_path,
-                                                                            monkeypatch):
+def test_where_gmsh_fails_on_the_patches_they_are_cut_again_at_wider_folds(tmp_path,
+                                                                           monkeypatch):
     """A fresh mesh whose patches cut at CREASE gmsh cannot mesh (the clay's heap beside the
-    blade: two patches that overlapped once meshed afresh) is made of patches cut at
-    WIDE_CREASE; where that fails too, the run hears why."""
+    blade: two patches that overlapped once meshed afresh) is made of patches cut at each
+    of WIDER_CREASES in turn; where all fail, the run hears why."""
     from mpi4py import MPI
     from soilbin.remesh import mesher
     tried = []
@@ -381,12 +381,13 @@ def test_where_gmsh_fails_on_the_patches_they_are_cut_again_at_a_wider_fold(tmp_
             return tetrahedra(*args)
         return attempt
     surface, groups = Surface.of(*refined_box_surface(3)), {f"face{k}": k for k in range(1, 7)}
-    monkeypatch.setattr(mesher, "_tetrahedra", failing_at(mesher.CREASE))
+    first, (second, last) = mesher.CREASE, mesher.WIDER_CREASES
+    monkeypatch.setattr(mesher, "_tetrahedra", failing_at(first, second))
     tagged = mesher.mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1}, groups,
                                  tmp_path / "wide.msh")
-    assert tried == [mesher.CREASE, mesher.WIDE_CREASE] and tagged.mesh.topology.dim == 3
-    monkeypatch.setattr(mesher, "_tetrahedra", failing_at(mesher.CREASE, mesher.WIDE_CREASE))
-    with pytest.raises(RuntimeError, match=f"cut at {mesher.WIDE_CREASE:.2f}"):
+    assert tried == [first, second, last] and tagged.mesh.topology.dim == 3
+    monkeypatch.setattr(mesher, "_tetrahedra", failing_at(first, second, last))
+    with pytest.raises(RuntimeError, match=f"cut at {last:.2f}"):
         mesher.mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1}, groups,
                             tmp_path / "none.msh")
 

@@ -22,7 +22,7 @@ tine's soil), and again by MeshAdapt (0.46 s) where Delaunay fails or leaves a t
 below the scene's ``remesh.min_quality`` or :data:`FRESH_QUALITY` (on the mapped patches of
 the tine's soil Frontal-Delaunay once left hundreds of inverted triangles), whose mesh is then
 kept unless it holds a flat tetrahedron (:data:`FLAT`); where neither is kept, both again on
-patches cut only at folds of more than :data:`WIDE_CREASE`. gmsh's own
+patches cut only at larger folds (:data:`WIDER_CREASES`). gmsh's own
 ``classifySurfaces`` does not cut at a group's border where the boundary is flat (the footing
 beside the free surface).
 
@@ -45,11 +45,12 @@ from ..problem.mesh_quality import simplex_quality
 
 #: Where the boundary folds by more than this (radians), gmsh cuts it into patches.
 CREASE = math.radians(40.0)
-#: The fold a fresh mesh's patches are cut at where gmsh fails on those cut at
-#: :data:`CREASE`: the clay's heap beside the blade, a patch of 17 triangles cut from the
-#: free surface by a fold of 40-50 degrees, overlapped it once both were meshed afresh (the
-#: 0.35-in mesh at 2.03 in of travel; at 60 degrees the two are one patch, which gmsh meshes).
-WIDE_CREASE = math.radians(60.0)
+#: The folds a fresh mesh's patches are cut at, in turn, where gmsh fails on those cut at
+#: :data:`CREASE`: the clay's heap beside the blade, a patch of 9-17 triangles cut from the
+#: free surface by a sharp crest, overlapped it once both were meshed afresh (on the 0.35-in
+#: mesh at 2.03 in the two are one patch at 50 degrees, which gmsh meshes; on the 1.5-in mesh
+#: at 4.3 in gmsh meshes them at 70 degrees and more, one triangle moved between them).
+WIDER_CREASES = (math.radians(60.0), math.radians(90.0))
 
 #: gmsh's surface algorithms for the patches of a 3D remesh, in the order tried (module doc).
 DELAUNAY, MESH_ADAPT = 5, 1
@@ -117,13 +118,16 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
     ``regions``, ``boundaries`` as :func:`mesh_outline`'s. A Delaunay mesh is kept if its
     least scaled Jacobian is above ``min_quality`` and :data:`FRESH_QUALITY`, else MeshAdapt's
     if it is above :data:`FLAT`; where neither is, both again with the boundary cut into
-    patches at :data:`WIDE_CREASE` (module doc)."""
+    patches at each of :data:`WIDER_CREASES` in turn; the last failure raised (module doc)."""
     def model():
-        try:
-            _tetrahedra(surface, sizes, regions, boundaries, min_quality, CREASE)
-        except RuntimeError:
-            gmsh.clear()
-            _tetrahedra(surface, sizes, regions, boundaries, min_quality, WIDE_CREASE)
+        for crease in (CREASE, *WIDER_CREASES):
+            try:
+                _tetrahedra(surface, sizes, regions, boundaries, min_quality, crease)
+                break
+            except RuntimeError:
+                if crease == WIDER_CREASES[-1]:
+                    raise
+                gmsh.clear()
         check_cells(RuntimeError, "the remesher made", 3, True)
         _write(path)
         return regions, dict(boundaries)
