@@ -118,15 +118,17 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
     ``regions``, ``boundaries`` as :func:`mesh_outline`'s. A Delaunay mesh is kept if its
     least scaled Jacobian is above ``min_quality`` and :data:`FRESH_QUALITY`, else MeshAdapt's
     if it is above :data:`FLAT`; where neither is, both again with the boundary cut into
-    patches at each of :data:`WIDER_CREASES` in turn; the last failure raised (module doc)."""
+    patches at each of :data:`WIDER_CREASES` in turn, unless the surface passes through
+    itself (on patches of wider folds gmsh has meshed such a one); the last failure raised
+    (module doc)."""
     def model():
         for crease in (CREASE, *WIDER_CREASES):
             try:
                 _tetrahedra(surface, sizes, regions, boundaries, min_quality, crease)
                 break
             except RuntimeError:
-                if crease == WIDER_CREASES[-1]:
-                    raise
+                if crease == WIDER_CREASES[-1] or surface.folded(boundaries):
+                    raise   # a soil through itself would be meshed as a wrong one
                 gmsh.clear()
         check_cells(RuntimeError, "the remesher made", 3, True)
         _write(path)
