@@ -198,10 +198,9 @@ def mesh_cavity(surface, sizes, keep, least):
 
 def _in_child(function, *args):
     """``function(*args)`` in a forked child process, its result sent back pickled; None
-    where the child dies. gmsh 4.8's 3D Delaunay of a cavity once died of a bus error (the
-    clay on the 0.75-in mesh remeshed below 0.04, at 2.2 in of travel), and the run with
-    it; the same cavity meshed in another process did not, so the fault is in what gmsh
-    reads of its own memory."""
+    where the child dies. gmsh 4.8's 3D Delaunay of one cavity of the clay (the 0.75-in mesh
+    remeshed below 0.04, at 2.2 in of travel) died of a bus error in the run, and of a
+    segmentation fault in a fresh process given the same cavity, and the run with it."""
     read, write = os.pipe()
     child = os.fork()
     if child == 0:   # no MPI and no exit handlers here: the parent's, not the child's
