@@ -25,6 +25,7 @@ import dolfinx.fem.petsc  # noqa: F401
 from ..errors import InputError
 from ..layout import GLOBAL
 from ..records.scene import TOOL, Control
+from ..solver.resources import release
 from ..solver.stepping import Observation
 from ..tensors import ufl_from_mandel
 
@@ -325,7 +326,14 @@ def start_mean_pressure(disc, points, w, w_committed):
     p, q = ufl.TrialFunction(P), ufl.TestFunction(P)
     mean_stress = ufl.tr(ufl_from_mandel(points.stress)) / 3.0
     dx = disc.measure()
-    projection = fem.petsc.LinearProblem(p * q * dx, mean_stress * q * dx, petsc_options={
-        "ksp_type": "preonly", "pc_type": "lu"}).solve()
-    w.x.array[to_parent] = projection.x.array
+    options = {"ksp_type": "preonly", "pc_type": "lu"}
+    problem = fem.petsc.LinearProblem(p * q * dx, mean_stress * q * dx, petsc_options=options)
+    w.x.array[to_parent] = problem.solve().x.array
     w_committed.x.array[:] = w.x.array
+    # DOLFINx leaves its options in PETSc's database under a prefix of its own, which holds
+    # 512 at most: a run that remeshed some 250 times stopped on a full database
+    prefix = problem.solver.getOptionsPrefix()
+    database = PETSc.Options()
+    for key in options:
+        database.delValue(prefix + key)
+    release(problem.solver, problem.A, problem.b)
