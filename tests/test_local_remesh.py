@@ -94,7 +94,7 @@ def test_gmsh_dying_on_a_cavity_fails_the_cavity_not_the_run(monkeypatch):
     """gmsh 4.8 once died of a bus error meshing a cavity of the clay's soil, and the run
     with it: a cavity is meshed in a child process, whose death gives no mesh (the remesher
     then grows the cavity or meshes the soil afresh), while the child's mesh is the one gmsh
-    makes in this process."""
+    makes in this process and an error of the child's is raised here."""
     import os
     import signal
     from soilbin.remesh import mesher
@@ -114,6 +114,9 @@ def test_gmsh_dying_on_a_cavity_fails_the_cavity_not_the_run(monkeypatch):
     monkeypatch.setattr(mesher, "_cavity_tetrahedra",
                         lambda *args: os.kill(os.getpid(), signal.SIGBUS))
     assert remeshed_around(points, cells, triangles, tags, sizes, target) is None
+    monkeypatch.setattr(mesher, "_cavity_tetrahedra", lambda *args: 1 / 0)   # a bug is one
+    with pytest.raises(ZeroDivisionError):
+        remeshed_around(points, cells, triangles, tags, sizes, target)
 
 
 def test_a_fresh_patch_that_makes_a_triangle_as_it_was_bounds_the_mesh_once():

@@ -197,28 +197,36 @@ def mesh_cavity(surface, sizes, keep, least):
 
 
 def _in_child(function, *args):
-    """``function(*args)`` in a forked child process, its result sent back pickled; None
-    where the child dies. gmsh 4.8's 3D Delaunay of one cavity of the clay (the 0.75-in mesh
-    remeshed below 0.04, at 2.2 in of travel) died of a bus error in the run, and of a
-    segmentation fault in a fresh process given the same cavity, and the run with it."""
+    """``function(*args)`` in a forked child process, its result (or the exception it
+    raised, raised again here) sent back pickled; None where the child dies. gmsh 4.8's 3D
+    Delaunay of one cavity of the clay (the 0.75-in mesh remeshed below 0.04, at 2.2 in of
+    travel) died of a bus error in the run, and of a segmentation fault in a fresh process
+    given the same cavity, and the run with it."""
     read, write = os.pipe()
     child = os.fork()
     if child == 0:   # no MPI and no exit handlers here: the parent's, not the child's
         os.close(read)
         for fault in (signal.SIGSEGV, signal.SIGBUS):   # PETSc's handler would abort MPI
             signal.signal(fault, signal.SIG_DFL)
-        status = 1
         try:
+            try:
+                sent = (True, function(*args))
+            except Exception as err:
+                sent = (False, err)
             with os.fdopen(write, "wb") as pipe:
-                pickle.dump(function(*args), pipe)
-            status = 0
+                pickle.dump(sent, pipe)
         finally:
-            os._exit(status)
+            os._exit(0)
     os.close(write)
     with os.fdopen(read, "rb") as pipe:
         sent = pipe.read()
     _, status = os.waitpid(child, 0)
-    return pickle.loads(sent) if status == 0 else None
+    if status != 0 or not sent:
+        return None
+    returned, value = pickle.loads(sent)
+    if not returned:
+        raise value
+    return value
 
 
 def _cavity_tetrahedra(surface, sizes, keep, least):
