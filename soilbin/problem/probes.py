@@ -1,5 +1,6 @@
 """Where things are on the initial mesh: the cell in front of a point, and a value
 evaluated in one cell (on whichever rank owns it)."""
+import basix
 import numpy as np
 from mpi4py import MPI
 from dolfinx import fem
@@ -26,13 +27,21 @@ def cell_ahead(mesh, point, direction):
 
 
 class CellValue:
-    """A scalar UFL expression at the midpoint of one cell, returned on every rank."""
+    """A scalar UFL expression at the centroid of one cell, returned on every rank (of a
+    quadratic tetrahedron's P1 divergence, the cell's mean)."""
 
     def __init__(self, mesh, expression, cell):
-        self._expression = fem.Expression(expression, np.full((1, mesh.topology.dim), 0.5))
+        self._expression = fem.Expression(expression, reference_centroid(mesh))
         self._cell, self._comm = cell, mesh.comm
 
     def __call__(self):
         local = (float(self._expression.eval(np.array([self._cell], dtype=np.int32)).ravel()[0])
                  if self._cell >= 0 else 0.0)
         return self._comm.allreduce(local, op=MPI.SUM)
+
+
+def reference_centroid(mesh):
+    """(1, dim): the centroid of the mesh's reference cell (of a tetrahedron a quarter along
+    each axis; (0.5, 0.5, 0.5) lies outside it)."""
+    corners = basix.geometry(getattr(basix.CellType, mesh.topology.cell_type.name))
+    return corners.mean(axis=0, keepdims=True)
