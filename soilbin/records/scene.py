@@ -296,11 +296,14 @@ class Remesh(Params):
                                          "least scaled Jacobian to 1.15 min_quality (the "
                                          "transfer then loses far less force); else it is "
                                          "meshed afresh")
-    local_first: bool = param(True, doc="a three-dimensional soil below min_quality that "
-                                        "smoothing does not mend is meshed afresh only "
-                                        "around its cells below 1.15 min_quality (up to "
-                                        "three layers of neighbours), the rest kept, where "
-                                        "that lifts it to 1.15 min_quality; else all of it")
+    local_first: bool = param(False, doc="a three-dimensional soil below min_quality that "
+                                         "smoothing does not mend is meshed afresh only "
+                                         "around its cells below 1.15 min_quality (up to "
+                                         "three layers of neighbours), the rest kept, where "
+                                         "that lifts it to 1.15 min_quality; else all of it. "
+                                         "Off by default: gmsh fills a cavity with fewer "
+                                         "nodes than it had, and a tool's draft climbs on "
+                                         "the coarser cells (docs/theory.md, remeshing)")
     retries: int = param(3, lo=0, doc="after a remesh that fails (gmsh, the transfer or the "
                                       "re-equilibration), go on on the old mesh and try again "
                                       "after each of up to this many steps before the run "
