@@ -176,33 +176,43 @@ def table_rows(r):
 
 
 AGAIN = "; rows measured again by "
+MACHINE, COMMAND = "Machine: ", "; command: "
+
+
+def this_machine():
+    """'nproc N, CPU model' of the machine this runs on."""
+    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo")
+                if line.startswith("model name")), "unknown CPU")
+    return f"nproc {len(os.sched_getaffinity(0))}, {cpu}"
 
 
 def page_rows(page, names):
     """The rows of the cases ``names`` in ``page``'s benchmark block, in its order: case ->
-    (row of the first table, row of the per-iteration table), as the page holds them; and the
-    commands that measured rows again, as its last line names them (None if none)."""
+    (row of the first table, row of the per-iteration table), as the page holds them; the
+    commands that measured rows again, as its last line names them (None if none); and the
+    machine it names."""
     block = page.read_text().split("<!-- benchmark:start -->")[1].split("<!-- benchmark:end -->")[0]
     first, cost = ({line.split(" | ")[0][2:]: line for line in part.splitlines()
                     if line.startswith("| ")} for part in block.split(COST_TITLE))
-    again = block.strip().splitlines()[-1].partition(AGAIN)[2] or None
+    last = block.strip().splitlines()[-1]
+    again = last.partition(AGAIN)[2] or None
+    machine = last.partition(MACHINE)[2].partition(COMMAND)[0]
     return {name: (line, cost[name]) for name, line in first.items()
-            if name in names and name in cost}, again
+            if name in names and name in cost}, again, machine
 
 
-def markdown(rows, command, again=None):
+def markdown(rows, command, again=None, machine=None):
     """The block: ``rows`` a list of :func:`table_rows`; ``again`` the commands (in
-    backquotes) that measured some of them again."""
+    backquotes) that measured some of them again; ``machine`` what they were measured on
+    (default: :func:`this_machine`)."""
     lines = [row(HEAD), row(["---"] * len(HEAD)), *(first for first, _ in rows),
              "", COST_TITLE, "", row(COST), row(["---"] * len(COST)), *(cost for _, cost in rows)]
-    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo")
-                if line.startswith("model name")), "unknown CPU")
     lines += ["", "Newton (failed): iterations of converged steps (of attempts that were cut). "
               "CPU = `time.process_time` of the case's own process (total = set-up incl. mesh and "
               "form compilation + solve); memory = peak resident set. Serial runs on a machine "
               "shared with other jobs (CPU time, not wall time, is comparable).",
-              f"Machine: nproc {len(os.sched_getaffinity(0))}, {cpu}; "
-              f"command: `{command}`" + (AGAIN + again if again else "")]
+              f"{MACHINE}{machine or this_machine()}{COMMAND}`{command}`"
+              + (AGAIN + again if again else "")]
     return "\n".join(lines) + "\n"
 
 
@@ -236,11 +246,13 @@ def main():
     if args.update:   # the page's rows of the other cases that are still cases, as they stand
         known = {name for quick in (False, True) for name, _, _ in cases(quick)}
         fresh = {r["case"]: table_rows(r) for r in results}
-        kept, again = page_rows(page, known)
+        kept, again, machine = page_rows(page, known)
         rows = [fresh.pop(name, None) or old for name, old in kept.items()] + list(fresh.values())
-        # a whole run's table with some of its rows measured again
+        # a whole run's table with some of its rows measured again, perhaps on another machine
+        here = this_machine()
         text = markdown(rows, "OMP_NUM_THREADS=1 python scripts/benchmark.py",
-                        again=(again + ", then " if again else "") + f"`{command}`")
+                        again=(again + ", then " if again else "") + f"`{command}`",
+                        machine=machine if here in machine else f"{machine}, then {here}")
     else:
         text = markdown([table_rows(r) for r in results], command)
     args.out.mkdir(parents=True, exist_ok=True)

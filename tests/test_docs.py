@@ -39,19 +39,20 @@ def test_the_builder_list_is_the_catalogue():
 
 def test_the_benchmark_block_is_rebuilt_from_its_own_rows(monkeypatch):
     """`scripts/benchmark.py --update` keeps the page's rows of the cases it does not run: the
-    block read back and written again from them is the block, every row a case's, and a
-    measured case's row is the one written from its results."""
+    block read back and written again from them is the block (on any machine: it names the
+    one its rows were measured on), every row a case's, and a measured case's row is the one
+    written from its results."""
     monkeypatch.syspath_prepend(str(ROOT / "scripts"))
     import benchmark
     page = ROOT / "docs" / "performance.md"
     block = page.read_text().split("<!-- benchmark:start -->\n")[1].split("<!-- benchmark:end -->")[0]
     names = {name for quick in (False, True) for name, _, _ in benchmark.cases(quick)}
-    rows, again = benchmark.page_rows(page, names)
+    rows, again, machine = benchmark.page_rows(page, names)
     first = [line for line in block.split(benchmark.COST_TITLE)[0].splitlines()
              if line.startswith("| ")]
     assert len(rows) == len(first) - 2   # the heading and the rule
     assert benchmark.markdown(list(rows.values()), "OMP_NUM_THREADS=1 python "
-                              "scripts/benchmark.py", again) == block
+                              "scripts/benchmark.py", again, machine) == block
     name = next(iter(rows))
     measured = dict(case=name, element="hex8", solver="LU", dofs=10, steps=2, iterations=7,
                     failed=1, solve_s=0.5, setup_s=1.25, memory_MB=200.4, kind="error %",
