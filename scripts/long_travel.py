@@ -1,11 +1,12 @@
 """The 2-in tool's long travel against the mesh: studies/tine-long-travel.toml (the cap soil)
 or, with --study tine-long-clay, studies/tine-long-clay.toml (the undrained clay), or with
 --study tine-long-clay-paths, studies/tine-long-clay-paths.toml (the clay along three paths of
-remeshes on two meshes); their tables in docs/chapter8.md.
+remeshes on each of its meshes); their tables in docs/chapter8.md.
 
 Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summary.json,
 curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
-two tables: per element and mesh the draft at each inch of the scene's travel, the lift at
+two tables (three where a mesh was run along several paths of remeshes, first the drafts
+over them: mean and range): per element and mesh the draft at each inch of the scene's travel, the lift at
 the end, the draft over the last sixth of the travel (mean, spread and slope) and over its
 last half (mean and slope: the remeshes cut teeth into the curve); and what the travel cost
 (cells, remeshes and how many of them were smoothed or meshed afresh around the poor cells
@@ -96,6 +97,45 @@ def costs(results, scene):
     return "\n".join(lines)
 
 
+def over_paths(results, scene):
+    """Per mesh run along several paths of remeshes (cases that differ in nothing else): the
+    draft at 2 and 4 in and over the last half and the last sixth of the travel, each as the
+    mean over the paths that got there and their range; '' where no mesh has two paths."""
+    groups = {}
+    for case, summary, rows, _ in results:
+        mesh = (case.values.get(ELEMENT, scene.analysis.element.value),
+                case.values.get(SIZE, scene.mesh.element_size))
+        groups.setdefault(mesh, []).append((summary, rows))
+    if all(len(paths) < 2 for paths in groups.values()):
+        return ""
+    travel = scene.loading.magnitude
+    lines = ["| element | element size [in] | paths (to the end) | draft at 2 in [lb] | "
+             "draft at 4 in [lb] | draft over the last half [lb] | "
+             "draft over the last sixth [lb] |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    for (element, size), paths in groups.items():
+        ended = [(summary, rows) for summary, rows in paths
+                 if rows[-1]["displacement"] >= travel * (1.0 - 1e-9)]
+        halves = [steady_force([SimpleNamespace(**row) for row in rows], 0.5)
+                  for _, rows in ended]
+        sixths = [summary["steady_draft"] for summary, _ in ended]
+        cells = [_mean_range([at(rows, "force", t) for _, rows in paths]) for t in (2.0, 4.0)]
+        lines.append(f"| `{element}` | {size:g} | {len(paths)} ({len(ended)}) | "
+                     + " | ".join(cells + [_mean_range(halves), _mean_range(sixths)]) + " |")
+    return "\n".join(lines)
+
+
+def _mean_range(values):
+    """'mean (low–high, ±half the range in % of the mean)' of the values that are not None."""
+    values = [v for v in values if v is not None]
+    if not values:
+        return "–"
+    mean = float(np.mean(values))
+    if len(values) == 1:
+        return f"{mean:.1f}"
+    low, high = min(values), max(values)
+    return f"{mean:.1f} ({low:.1f}–{high:.1f}, ±{50 * (high - low) / mean:.1f}%)"
+
+
 def _status(summary):
     """A run's status and how many of its remeshes failed (each tried again after the next
     step), where any did."""
@@ -129,7 +169,9 @@ def main():
         raise SystemExit(f"{args.out}: no finished case")
     scene = load_scene(study.scene_path)
     results.sort(key=lambda r: (r[0].values.get(ELEMENT, ""), -r[0].values.get(SIZE, 0.0)))
-    text = drafts(results, scene) + "\n\n" + costs(results, scene) + "\n"
+    summary = over_paths(results, scene)
+    text = ("\n\n".join(filter(None, [summary, drafts(results, scene), costs(results, scene)]))
+            + "\n")
     print(text)
     draw_figures(study, [Outcome(case, summary["status"], summary, ran=False)
                          for case, summary, _, _ in results], args.out)

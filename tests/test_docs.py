@@ -1,7 +1,10 @@
 """The user guide's scene table, model list and builder list are those of the code, its
-default of `make run` is the Makefile's, and the performance page's benchmark block is what
-the benchmark writes from its rows."""
+default of `make run` is the Makefile's, the performance page's benchmark block is what the
+benchmark writes from its rows, and the scripts' tables are what they say."""
 import re
+from types import SimpleNamespace
+
+import numpy as np
 
 from soilbin.meshes import BUILDERS
 from soilbin.models import MODELS
@@ -86,3 +89,28 @@ def test_the_tetrahedral_blade_is_compared_at_the_travel_of_the_finest_quadratic
     assert comparison[3] == "| tet | 1 / 1.5 | 34.2 (-5.0%) | 68.4 (-5.0%) | 102.6 (-5.0%) |"
     assert comparison[4] == (f"| {quadratic} | 1 / 1.5 | 36 (the reference) | "
                              "72 (the reference) | 108 (the reference) |")
+
+
+def test_the_paths_of_one_mesh_are_summed_up_by_their_mean_and_range(monkeypatch):
+    """scripts/long_travel.py: the cases that differ only in the threshold of a remesh are the
+    paths of one mesh; at a travel, the mean and range over those that reached it, over the
+    last half over those that reached the end; no summary where each mesh has one path."""
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    import long_travel
+    scene = SimpleNamespace(analysis=SimpleNamespace(element=SimpleNamespace(value="tet10-bbar")),
+                            mesh=SimpleNamespace(element_size=1.0),
+                            loading=SimpleNamespace(magnitude=8.0))
+
+    def path(size, quality, draft, end):
+        rows = [{"displacement": u, "force": draft} for u in np.linspace(0.0, end, 33)]
+        return (SimpleNamespace(values={"mesh.element_size": size,
+                                        "remesh.min_quality": quality}),
+                {"steady_draft": draft}, rows, [])
+    results = [path(1.0, 0.04, 200.0, 8.0), path(1.0, 0.05, 220.0, 8.0),
+               path(1.0, 0.045, 300.0, 5.0), path(0.5, 0.04, 180.0, 8.0)]
+    lines = long_travel.over_paths(results, scene).splitlines()
+    assert lines[2] == ("| `tet10-bbar` | 1 | 3 (2) | 240.0 (200.0–300.0, ±20.8%) | "
+                        "240.0 (200.0–300.0, ±20.8%) | 210.0 (200.0–220.0, ±4.8%) | "
+                        "210.0 (200.0–220.0, ±4.8%) |")
+    assert lines[3] == "| `tet10-bbar` | 0.5 | 1 (1) | 180.0 | 180.0 | 180.0 | 180.0 |"
+    assert long_travel.over_paths(results[3:], scene) == ""
