@@ -383,13 +383,31 @@ def test_where_gmsh_fails_on_the_patches_they_are_cut_again_at_wider_folds(tmp_p
     surface, groups = Surface.of(*refined_box_surface(3)), {f"face{k}": k for k in range(1, 7)}
     first, (second, last) = mesher.CREASE, mesher.WIDER_CREASES
     monkeypatch.setattr(mesher, "_tetrahedra", failing_at(first, second))
-    tagged = mesher.mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1}, groups,
-                                 tmp_path / "wide.msh")
-    assert tried == [first, second, last] and tagged.mesh.topology.dim == 3
+    gmsh.initialize(readConfigFiles=False)   # in this process: the child's calls are not seen
+    try:
+        mesher._written_tetrahedra(surface, cube_sizes(0.3), {"soil": 1}, groups,
+                                   tmp_path / "wide.msh", 0.0)
+    finally:
+        gmsh.finalize()
+    assert tried == [first, second, last] and len(meshio.read(tmp_path / "wide.msh").cells)
     monkeypatch.setattr(mesher, "_tetrahedra", failing_at(first, second, last))
-    with pytest.raises(RuntimeError, match=f"cut at {last:.2f}"):
+    with pytest.raises(RuntimeError, match=f"cut at {last:.2f}"):   # the child's, raised here
         mesher.mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1}, groups,
                             tmp_path / "none.msh")
+
+
+def test_gmsh_dying_on_a_fresh_mesh_fails_the_remesh_not_the_run(tmp_path, monkeypatch):
+    """gmsh meshes the soil afresh in a child process: a crash there is a RuntimeError here
+    (the remesh failed, and the run tries again after the next step)."""
+    import signal
+    from mpi4py import MPI
+    from soilbin.remesh import mesher
+    monkeypatch.setattr(mesher, "_written_tetrahedra",
+                        lambda *args: os.kill(os.getpid(), signal.SIGBUS))
+    with pytest.raises(RuntimeError, match="gmsh died meshing the deformed soil afresh"):
+        mesher.mesh_surface(MPI.COMM_SELF, Surface.of(*refined_box_surface(3)),
+                            cube_sizes(0.3), {"soil": 1}, {f"face{k}": k for k in range(1, 7)},
+                            tmp_path / "died.msh")
 
 
 def test_a_fresh_mesh_with_a_flat_tetrahedron_is_a_failed_remesh(tmp_path, monkeypatch):

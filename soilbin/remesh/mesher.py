@@ -28,7 +28,10 @@ beside the free surface).
 
 A cavity cut out of the soil's mesh (:func:`mesh_cavity`, for :mod:`.local`) is meshed the same
 way, but for the patches that are to stay: they keep their triangles, and the curves around
-them their edges (gmsh maps and meshes only the others, then the volume)."""
+them their edges (gmsh maps and meshes only the others, then the volume).
+
+gmsh meshes a three-dimensional soil or cavity in a forked child process (:func:`_in_child`):
+gmsh 4.8 has died of a bus error on a cavity, and a crash there is a remesh that failed."""
 import dataclasses
 import math
 import os
@@ -120,20 +123,31 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
     if it is above :data:`FLAT`; where neither is, both again with the boundary cut into
     patches at each of :data:`WIDER_CREASES` in turn, unless the surface passes through
     itself (on patches of wider folds gmsh has meshed such a one); the last failure raised
-    (module doc)."""
+    (module doc). gmsh meshes in a child process, which writes the file that is read here
+    (:func:`_in_child`): a crash of gmsh is a RuntimeError, not the end of the run."""
     def model():
-        for crease in (CREASE, *WIDER_CREASES):
-            try:
-                _tetrahedra(surface, sizes, regions, boundaries, min_quality, crease)
-                break
-            except RuntimeError:
-                if crease == WIDER_CREASES[-1] or surface.folded(boundaries):
-                    raise   # a soil through itself would be meshed as a wrong one
-                gmsh.clear()
-        check_cells(RuntimeError, "the remesher made", 3, True)
-        _write(path)
+        if _in_child(_written_tetrahedra, surface, sizes, regions, boundaries, path,
+                     min_quality) is None:
+            raise RuntimeError("gmsh died meshing the deformed soil afresh")
+        gmsh.open(str(path))
         return regions, dict(boundaries)
     return distribute(comm, "remesh", model, dimension=3)
+
+
+def _written_tetrahedra(surface, sizes, regions, boundaries, path, min_quality):
+    """:func:`mesh_surface`'s tetrahedra written to ``path``, in this process's gmsh
+    session; True."""
+    for crease in (CREASE, *WIDER_CREASES):
+        try:
+            _tetrahedra(surface, sizes, regions, boundaries, min_quality, crease)
+            break
+        except RuntimeError:
+            if crease == WIDER_CREASES[-1] or surface.folded(boundaries):
+                raise   # a soil through itself would be meshed as a wrong one
+            gmsh.clear()
+    check_cells(RuntimeError, "the remesher made", 3, True)
+    _write(path)
+    return True
 
 
 def _tetrahedra(surface, sizes, regions, boundaries, min_quality, crease):
@@ -201,7 +215,8 @@ def _in_child(function, *args):
     raised, raised again here) sent back pickled; None where the child dies. gmsh 4.8's 3D
     Delaunay of one cavity of the clay (the 0.75-in mesh remeshed below 0.04, at 2.2 in of
     travel) died of a bus error in the run, and of a segmentation fault in a fresh process
-    given the same cavity, and the run with it."""
+    given the same cavity, and the run with it. The child has the parent's gmsh session as
+    it was (a copy): a change it makes there is not seen here."""
     read, write = os.pipe()
     child = os.fork()
     if child == 0:   # no MPI and no exit handlers here: the parent's, not the child's
