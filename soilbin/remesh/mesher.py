@@ -21,7 +21,8 @@ they close, at the sizes of the background field: by Delaunay (0.05 s for the pa
 tine's soil), and again by MeshAdapt (0.46 s) where Delaunay fails or leaves a tetrahedron
 below the scene's ``remesh.min_quality`` or :data:`FRESH_QUALITY` (on the mapped patches of
 the tine's soil Frontal-Delaunay once left hundreds of inverted triangles), whose mesh is then
-kept unless it holds a flat tetrahedron (:data:`FLAT`); where neither is kept, both again on
+kept unless it holds a flat tetrahedron (:data:`FLAT`) or, its nodes moved by
+:mod:`.smoothing`, one below half ``remesh.min_quality``; where neither is kept, both again on
 patches cut only at larger folds (:data:`WIDER_CREASES`). gmsh's own
 ``classifySurfaces`` does not cut at a group's border where the boundary is flat (the footing
 beside the free surface).
@@ -44,6 +45,7 @@ import numpy as np
 
 from ..meshes.tagged import check_cells, distribute, generate_logged
 from ..problem.mesh_quality import simplex_quality
+from .smoothing import smoothed
 
 
 #: Where the boundary folds by more than this (radians), gmsh cuts it into patches.
@@ -120,7 +122,8 @@ def mesh_surface(comm, surface, sizes, regions, boundaries, path, min_quality=0.
     (rank 0; None elsewhere), distributed and written to the gmsh file ``path``; ``sizes``,
     ``regions``, ``boundaries`` as :func:`mesh_outline`'s. A Delaunay mesh is kept if its
     least scaled Jacobian is above ``min_quality`` and :data:`FRESH_QUALITY`, else MeshAdapt's
-    if it is above :data:`FLAT`; where neither is, both again with the boundary cut into
+    if it is above :data:`FLAT` and half ``min_quality``, its nodes moved where that lifts it
+    there (:func:`_lifted`); where neither is, both again with the boundary cut into
     patches at each of :data:`WIDER_CREASES` in turn, unless the surface passes through
     itself (on patches of wider folds gmsh has meshed such a one); the last failure raised
     (module doc). gmsh meshes in a child process, which writes the file that is read here
@@ -167,11 +170,41 @@ def _tetrahedra(surface, sizes, regions, boundaries, min_quality, crease):
             if attempt and least < FLAT:
                 raise RuntimeError(f"gmsh's mesh of the deformed soil holds a flat "
                                    f"tetrahedron (scaled Jacobian {least:.2g})")
+            if attempt and least <= min_quality / 2.0:
+                least = _lifted(groups, min_quality)
+                if least <= min_quality / 2.0:
+                    raise RuntimeError(f"gmsh's mesh of the deformed soil holds a tetrahedron "
+                                       f"of scaled Jacobian {least:.2g} however its nodes "
+                                       "move, below half remesh.min_quality")
         except RuntimeError as err:
             if attempt:
                 folded = surface.folded(boundaries)
                 raise RuntimeError(f"{err}{patch_groups(str(err), groups, boundaries)}"
                                    f"{folded and ': ' + folded}") from None
+
+
+def _lifted(groups, target):
+    """Moves the model's nodes to lift its cells toward the least scaled Jacobian ``target``
+    (:func:`~.smoothing.smoothed`; ``groups``: each patch's facet group) and returns the least
+    then. A MeshAdapt mesh below half min_quality cannot be brought back to equilibrium
+    (its first solution is refused, :meth:`~soilbin.problem.SoilProblem.solve`): the clay's
+    0.5-in mesh at 2.74 in of travel held one of 0.0132 against 0.045, four remeshes in a row,
+    and the run stopped."""
+    tags, coordinates, _ = gmsh.model.mesh.getNodes()
+    number = np.zeros(int(tags.max()) + 1, dtype=int)
+    number[tags] = np.arange(len(tags))
+    points = coordinates.reshape(-1, 3)
+    _, _, nodes = gmsh.model.mesh.getElements(3)
+    triangles, of = [], []
+    for patch, tag in groups.items():
+        _, _, on_patch = gmsh.model.mesh.getElements(2, patch)
+        triangles.append(number[np.concatenate(on_patch).reshape(-1, 3)])
+        of.append(np.full(len(triangles[-1]), tag))
+    moved, least = smoothed(points, number[np.concatenate(nodes).reshape(-1, 4)],
+                            np.concatenate(triangles), np.concatenate(of), target)
+    for k in np.flatnonzero((moved != points).any(axis=1)):
+        gmsh.model.mesh.setNode(int(tags[k]), moved[k].tolist(), [])
+    return least
 
 
 def mesh_cells(comm, points, cells, triangles, tags, regions, boundaries, path):
