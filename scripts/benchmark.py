@@ -252,7 +252,7 @@ def main():
         here = this_machine()
         text = markdown(rows, "OMP_NUM_THREADS=1 python scripts/benchmark.py",
                         again=(again + ", then " if again else "") + f"`{command}`",
-                        machine=machine if here in machine else f"{machine}, then {here}")
+                        machine=machine if not machine or here in machine else f"{machine}, then {here}")
     else:
         text = markdown([table_rows(r) for r in results], command)
     args.out.mkdir(parents=True, exist_ok=True)

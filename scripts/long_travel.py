@@ -7,11 +7,12 @@ Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summ
 curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
 two tables (three where a mesh was run along several paths of remeshes, first the drafts
 over them: mean and range): per element and mesh the draft at each inch of the scene's
-travel, the lift at the end, the draft over the last sixth of the travel (mean, spread and slope) and over its
-last half (mean and slope: the remeshes cut teeth into the curve); and what the travel cost
-(cells, remeshes and how many of them were smoothed or meshed afresh around the poor cells
-alone, steps, Newton iterations, wall time, a remesh against a Newton iteration, the plastic
-work's change by each transfer, and the draft a fresh, a local and a smoothed mesh took off).
+travel, the lift at the end, the draft over the last sixth of the travel (mean, spread and
+slope) and over its last half (mean and slope: the remeshes cut teeth into the curve); and
+what the travel cost (cells, remeshes and how many of them were smoothed or meshed afresh
+around the poor cells alone, steps, Newton iterations, wall time, a remesh against a Newton
+iteration, the plastic work's change by each transfer, and the draft a fresh, a local and a
+smoothed mesh took off).
 A case that failed (a remesh that could not be made) or was interrupted shows how far it went,
 and each case how many of its remeshes failed (each tried again after the next step).
 Copies the study's figures into docs/figures (--figures DIR). Loads in lb, travel in in.
