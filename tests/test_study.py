@@ -168,6 +168,17 @@ def test_study_figures_read_as_quantities_and_cases_in_words(tmp_path):
                                                                    "bonded = false"]
 
 
+def test_past_ten_curves_a_study_figure_dashes_the_default_colours(tmp_path):
+    """The eleventh curve has the first one's colour, dashed (the clay's paths study draws
+    twelve)."""
+    from soilbin.app.study_figures import curves_figure
+    study, outcomes = _tine_outcomes(tmp_path)
+    lines = curves_figure(study.figures[0], outcomes * 3, study, tmp_path).axes[0].get_lines()
+    assert len(lines) == 12
+    assert [line.get_linestyle() for line in (lines[0], lines[9], lines[10])] == ["-", "-", "--"]
+    assert lines[10].get_color() == lines[0].get_color() != lines[1].get_color()
+
+
 def test_the_table_names_labelled_cases(tmp_path):
     from soilbin.app.study import write_table
     study, outcomes = _tine_outcomes(tmp_path)

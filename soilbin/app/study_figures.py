@@ -5,6 +5,8 @@ as the cases' labels or their swept values in words ("tool width 2 in").
 """
 import csv
 
+from cycler import cycler
+
 from ..plotting import pyplot, wrapped
 from .figure_labels import FROM_REST, column_label, key_label, key_value, summary_label
 from .study import DONE
@@ -45,17 +47,20 @@ def legend(case, figure, study):
 
 def curves_figure(figure, outcomes, study, out):
     """curve.csv column y against column x, one line per case that converged a step (from
-    the initial state where both are zero there)."""
+    the initial state where both are zero there): the first ten solid in the default
+    colours, the next ten dashed in them, and so on."""
     scene = study.cases[0].scene
     start = [0.0] if figure.x in FROM_REST and figure.y in FROM_REST else []
     fig, ax = _axes(figure, study, column_label(figure.x, scene), column_label(figure.y, scene))
+    colours = pyplot().rcParams["axes.prop_cycle"].by_key()["color"]
+    ax.set_prop_cycle(cycler(linestyle=["-", "--", ":"]) * cycler(color=colours))
     for outcome in outcomes:
         path = out / outcome.case.name / "curve.csv"
         rows = list(csv.DictReader(path.open())) if path.exists() else []
         if rows:
             ax.plot(start + [float(r[figure.x]) for r in rows],
                     start + [float(r[figure.y]) for r in rows],
-                    "o-", ms=3, label=legend(outcome.case, figure, study))
+                    marker="o", ms=3, label=legend(outcome.case, figure, study))
     return _finish(fig, ax)
 
 
