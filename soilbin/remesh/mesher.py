@@ -190,20 +190,10 @@ def _lifted(groups, target):
     (its first solution is refused, :meth:`~soilbin.problem.SoilProblem.solve`): the clay's
     0.5-in mesh at 2.74 in of travel held one of 0.0132 against 0.045, four remeshes in a row,
     and the run stopped."""
-    tags, coordinates, _ = gmsh.model.mesh.getNodes()
-    number = np.zeros(int(tags.max()) + 1, dtype=int)
-    number[tags] = np.arange(len(tags))
-    points = coordinates.reshape(-1, 3)
-    _, _, nodes = gmsh.model.mesh.getElements(3)
-    triangles, of = [], []
-    for patch, tag in groups.items():
-        _, _, on_patch = gmsh.model.mesh.getElements(2, patch)
-        triangles.append(number[np.concatenate(on_patch).reshape(-1, 3)])
-        of.append(np.full(len(triangles[-1]), tag))
-    moved, least = smoothed(points, number[np.concatenate(nodes).reshape(-1, 4)],
-                            np.concatenate(triangles), np.concatenate(of), target)
+    nodes, points, cells, triangles, tags = _model_mesh(groups)
+    moved, least = smoothed(points, cells, triangles, tags, target)
     for k in np.flatnonzero((moved != points).any(axis=1)):
-        gmsh.model.mesh.setNode(int(tags[k]), moved[k].tolist(), [])
+        gmsh.model.mesh.setNode(int(nodes[k]), moved[k].tolist(), [])
     return least
 
 
@@ -287,19 +277,9 @@ def _cavity_tetrahedra(surface, sizes, keep, least):
         _generate(3)
         if _least_quality() < least:
             return None
-        tags, coordinates, _ = gmsh.model.mesh.getNodes()
-        number = np.zeros(int(tags.max()) + 1, dtype=int)
-        number[tags] = np.arange(len(tags))
-        _, _, nodes = gmsh.model.mesh.getElements(3)
-        triangles, of = [], []
-        for patch, tag in groups.items():
-            if patch not in kept:
-                _, _, on_patch = gmsh.model.mesh.getElements(2, patch)
-                triangles.append(np.concatenate(on_patch).reshape(-1, 3))
-                of.append(np.full(len(triangles[-1]), tag))
-        return (coordinates.reshape(-1, 3), number[np.concatenate(nodes).reshape(-1, 4)],
-                number[np.concatenate(triangles)] if triangles else np.zeros((0, 3), int),
-                np.concatenate(of) if of else np.zeros(0, int))
+        _, points, cells, triangles, tags = _model_mesh(
+            {patch: tag for patch, tag in groups.items() if patch not in kept})
+        return points, cells, triangles, tags
     except RuntimeError:
         return None
     finally:
@@ -431,11 +411,25 @@ def _size_field(sizes):
 
 def _least_quality():
     """The least scaled Jacobian of the model's tetrahedra (gmsh orients each positively)."""
-    _, _, nodes = gmsh.model.mesh.getElements(3)
-    tags, coordinates, _ = gmsh.model.mesh.getNodes()
-    position = np.zeros((int(tags.max()) + 1, 3))
-    position[tags] = coordinates.reshape(-1, 3)
-    return float(simplex_quality(position[np.concatenate(nodes).reshape(-1, 4)]).min())
+    _, points, cells, _, _ = _model_mesh({})
+    return float(simplex_quality(points[cells]).min())
+
+
+def _model_mesh(groups):
+    """The gmsh model's mesh as arrays: (its node tags (n,), their points (n, 3), the
+    tetrahedra (m, 4) and the triangles (k, 3) of the patches ``groups`` (gmsh surface ->
+    facet group tag) as rows of the points, each triangle's group (k,))."""
+    nodes, coordinates, _ = gmsh.model.mesh.getNodes()
+    number = np.zeros(int(nodes.max()) + 1, dtype=int)
+    number[nodes] = np.arange(len(nodes))
+    _, _, corners = gmsh.model.mesh.getElements(3)
+    triangles, tags = [np.zeros((0, 3), int)], [np.zeros(0, int)]
+    for patch, tag in groups.items():
+        _, _, on_patch = gmsh.model.mesh.getElements(2, patch)
+        triangles.append(number[np.concatenate(on_patch).reshape(-1, 3)])
+        tags.append(np.full(len(triangles[-1]), tag))
+    return (nodes, coordinates.reshape(-1, 3), number[np.concatenate(corners).reshape(-1, 4)],
+            np.concatenate(triangles), np.concatenate(tags))
 
 
 def _generate(dimension):
