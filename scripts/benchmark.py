@@ -250,9 +250,11 @@ def main():
         rows = [fresh.pop(name, None) or old for name, old in kept.items()] + list(fresh.values())
         # a whole run's table with some of its rows measured again, perhaps on another machine
         here = this_machine()
+        if machine and here not in machine:
+            machine = f"{machine}, then {here}"
         text = markdown(rows, "OMP_NUM_THREADS=1 python scripts/benchmark.py",
                         again=(again + ", then " if again else "") + f"`{command}`",
-                        machine=machine if not machine or here in machine else f"{machine}, then {here}")
+                        machine=machine)
     else:
         text = markdown([table_rows(r) for r in results], command)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -48,7 +48,7 @@ def legend(case, figure, study):
 def curves_figure(figure, outcomes, study, out):
     """curve.csv column y against column x, one line per case that converged a step (from
     the initial state where both are zero there): the first ten solid in the default
-    colours, the next ten dashed in them, and so on."""
+    colours, the next ten dashed and the next dotted in them."""
     scene = study.cases[0].scene
     start = [0.0] if figure.x in FROM_REST and figure.y in FROM_REST else []
     fig, ax = _axes(figure, study, column_label(figure.x, scene), column_label(figure.y, scene))
