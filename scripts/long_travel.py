@@ -5,14 +5,14 @@ remeshes on each of its meshes); their tables in docs/chapter8.md.
 
 Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summary.json,
 curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
-two tables (three where a mesh was run along several paths of remeshes, first the drafts
-over them: mean and range): per element and mesh the draft at each inch of the scene's
-travel, the lift at the end, the draft over the last sixth of the travel (mean, spread and
-slope) and over its last half (mean and slope: the remeshes cut teeth into the curve); and
-what the travel cost (cells, remeshes and how many of them were smoothed or meshed afresh
-around the poor cells alone, steps, Newton iterations, wall time, a remesh against a Newton
-iteration, the plastic work's change by each transfer, and the draft a fresh, a local and a
-smoothed mesh took off).
+two tables (where a mesh was run along several paths of remeshes, first the drafts over them,
+mean and range, and the fit of the draft over the last half against the cells' size): per
+element and mesh the draft at each inch of the scene's travel, the lift at the end, the draft
+over the last sixth of the travel (mean, spread and slope) and over its last half (mean and
+slope: the remeshes cut teeth into the curve); and what the travel cost (cells, remeshes and
+how many of them were smoothed or meshed afresh around the poor cells alone, steps, Newton
+iterations, wall time, a remesh against a Newton iteration, the plastic work's change by each
+transfer, and the draft a fresh, a local and a smoothed mesh took off).
 A case that failed (a remesh that could not be made) or was interrupted shows how far it went,
 and each case how many of its remeshes failed (each tried again after the next step).
 Copies the study's figures into docs/figures (--figures DIR). Loads in lb, travel in in.
@@ -125,6 +125,30 @@ def over_paths(results, scene):
     return "\n".join(lines)
 
 
+def mesh_limit(results, scene):
+    """The steady draft (over the last half) of every path that reached the end against its
+    cells' size h at the blade, fitted by least squares with D = D_inf + C h: a shear band is
+    smeared over one cell, so its plastic work, and with it the draft, is over by a part
+    proportional to h. The paths of one mesh are its samples, their spread the scatter the
+    fit's standard error carries. '' with fewer than two meshes or than four paths."""
+    travel = scene.loading.magnitude
+    levels = [(case.values.get(SIZE, scene.mesh.element_size),
+               steady_force([SimpleNamespace(**row) for row in rows], 0.5))
+              for case, _, rows, _ in results if rows[-1]["displacement"] >= travel * (1 - 1e-9)]
+    h, draft = np.array(levels).T if levels else (np.empty(0), np.empty(0))
+    if len(np.unique(h)) < 2 or len(h) < 4:
+        return ""
+    design = np.column_stack([np.ones_like(h), h])
+    (limit, slope), residual, _, _ = np.linalg.lstsq(design, draft, rcond=None)
+    variance = residual[0] / (len(h) - 2) * np.linalg.inv(design.T @ design)
+    scatter = np.sqrt(residual[0] / len(h))
+    return (f"D = D∞ + C h through the draft over the last half of the {len(h)} paths that "
+            f"reached {travel:g} in on {len(np.unique(h))} meshes (h = "
+            f"{', '.join(f'{size:g}' for size in sorted(set(h), reverse=True))} in), by least "
+            f"squares: D∞ = {limit:.1f} ± {np.sqrt(variance[0, 0]):.1f} lb (one standard "
+            f"error), C = {slope:.1f} lb/in, the paths about the line ±{scatter:.1f} lb (rms).")
+
+
 def _mean_range(values):
     """'mean (low–high, ±half the range in % of the mean)' of the values that are not None."""
     values = [v for v in values if v is not None]
@@ -171,8 +195,9 @@ def main():
     scene = load_scene(study.scene_path)
     results.sort(key=lambda r: (r[0].values.get(ELEMENT, ""), -r[0].values.get(SIZE, 0.0)))
     summary = over_paths(results, scene)
-    text = ("\n\n".join(filter(None, [summary, drafts(results, scene), costs(results, scene)]))
-            + "\n")
+    limit = mesh_limit(results, scene) if summary else ""
+    text = ("\n\n".join(filter(None, [summary, limit, drafts(results, scene),
+                                        costs(results, scene)])) + "\n")
     print(text)
     draw_figures(study, [Outcome(case, summary["status"], summary, ran=False)
                          for case, summary, _, _ in results], args.out)

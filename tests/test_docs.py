@@ -114,3 +114,25 @@ def test_the_paths_of_one_mesh_are_summed_up_by_their_mean_and_range(monkeypatch
                         "210.0 (200.0–220.0, ±4.8%) |")
     assert lines[3] == "| `tet10-bbar` | 0.5 | 1 (1) | 180.0 | 180.0 | 180.0 | 180.0 |"
     assert long_travel.over_paths(results[3:], scene) == ""
+
+
+def test_the_steady_draft_is_fitted_against_the_cells_size_over_every_path_to_the_end(
+        monkeypatch):
+    """scripts/long_travel.py: D = D_inf + C h by least squares over the paths that reached the
+    end (200 + 40 h, each mesh's two paths 2 lb either side of it; a path that stopped short,
+    far off the line, left out); nothing with one mesh."""
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    import long_travel
+    scene = SimpleNamespace(mesh=SimpleNamespace(element_size=1.0),
+                            loading=SimpleNamespace(magnitude=8.0))
+
+    def path(size, draft, end=8.0):
+        rows = [{"displacement": u, "force": draft} for u in np.linspace(0.0, end, 33)]
+        return SimpleNamespace(values={"mesh.element_size": size}), {}, rows, []
+    results = [path(h, 200.0 + 40.0 * h + noise) for h in (1.5, 1.0, 0.5) for noise in (-2, 2)]
+    line = long_travel.mesh_limit(results + [path(0.5, 400.0, end=5.0)], scene)
+    assert line == ("D = D∞ + C h through the draft over the last half of the 6 paths that "
+                    "reached 8 in on 3 meshes (h = 1.5, 1, 0.5 in), by least squares: "
+                    "D∞ = 200.0 ± 2.6 lb (one standard error), C = 40.0 lb/in, the paths about "
+                    "the line ±2.0 lb (rms).")
+    assert long_travel.mesh_limit(results[:2], scene) == ""
