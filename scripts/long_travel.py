@@ -125,12 +125,17 @@ def over_paths(results, scene):
     return "\n".join(lines)
 
 
+#: The orders of D = D_inf + C h^p fitted besides p = 1, with their names (:func:`mesh_limit`).
+OTHER_ORDERS = {0.5: "√h", 2.0: "h²"}
+
+
 def mesh_limit(results, scene):
     """The steady draft (over the last half) of every path that reached the end against its
-    cells' size h at the blade, fitted by least squares with D = D_inf + C h: a shear band is
-    smeared over one cell, so its plastic work, and with it the draft, is over by a part
-    proportional to h. The paths of one mesh are its samples, their spread the scatter the
-    fit's standard error carries. '' with fewer than two meshes or than four paths."""
+    cells' size h at the blade, fitted by least squares with D = D_inf + C h^p: p = 1 with
+    the standard error of D_inf (the paths of one mesh are its samples, their spread the
+    scatter the error carries), and D_inf with p = 0.5 and 2, to show how far the limit hangs
+    on an order that the paths' scatter does not fix. '' with fewer than two meshes or than
+    four paths."""
     travel = scene.loading.magnitude
     levels = [(case.values.get(SIZE, scene.mesh.element_size),
                steady_force([SimpleNamespace(**row) for row in rows], 0.5))
@@ -138,15 +143,24 @@ def mesh_limit(results, scene):
     h, draft = np.array(levels).T if levels else (np.empty(0), np.empty(0))
     if len(np.unique(h)) < 2 or len(h) < 4:
         return ""
-    design = np.column_stack([np.ones_like(h), h])
-    (limit, slope), residual, _, _ = np.linalg.lstsq(design, draft, rcond=None)
-    variance = residual[0] / (len(h) - 2) * np.linalg.inv(design.T @ design)
-    scatter = np.sqrt(residual[0] / len(h))
+    limit, slope, scatter, error = _power_fit(h, draft, 1.0)
+    others = [_power_fit(h, draft, p) for p in OTHER_ORDERS]
     return (f"D = D∞ + C h through the draft over the last half of the {len(h)} paths that "
             f"reached {travel:g} in on {len(np.unique(h))} meshes (h = "
             f"{', '.join(f'{size:g}' for size in sorted(set(h), reverse=True))} in), by least "
-            f"squares: D∞ = {limit:.1f} ± {np.sqrt(variance[0, 0]):.1f} lb (one standard "
-            f"error), C = {slope:.1f} lb/in, the paths about the line ±{scatter:.1f} lb (rms).")
+            f"squares: D∞ = {limit:.1f} ± {error:.1f} lb (one standard error), C = {slope:.1f} "
+            f"lb/in, the paths about the line ±{scatter:.1f} lb (rms). With "
+            + " or ".join(OTHER_ORDERS.values()) + " instead of h: D∞ = "
+            + " or ".join(f"{fit[0]:.1f} lb (±{fit[2]:.1f} lb rms)" for fit in others) + ".")
+
+
+def _power_fit(h, draft, order):
+    """D_inf, C, the rms of the residuals and the standard error of D_inf of the least-squares
+    fit D = D_inf + C h^order."""
+    design = np.column_stack([np.ones_like(h), h**order])
+    (limit, slope), residual, _, _ = np.linalg.lstsq(design, draft, rcond=None)
+    variance = residual[0] / (len(h) - 2) * np.linalg.inv(design.T @ design)
+    return limit, slope, np.sqrt(residual[0] / len(h)), np.sqrt(variance[0, 0])
 
 
 def _mean_range(values):

@@ -120,7 +120,8 @@ def test_the_steady_draft_is_fitted_against_the_cells_size_over_every_path_to_th
         monkeypatch):
     """scripts/long_travel.py: D = D_inf + C h by least squares over the paths that reached the
     end (200 + 40 h, each mesh's two paths 2 lb either side of it; a path that stopped short,
-    far off the line, left out); nothing with one mesh."""
+    far off the line, left out), and D_inf with h² (exact on 200 + 40 h²); nothing with one
+    mesh."""
     monkeypatch.syspath_prepend(str(ROOT / "scripts"))
     import long_travel
     scene = SimpleNamespace(mesh=SimpleNamespace(element_size=1.0),
@@ -131,8 +132,12 @@ def test_the_steady_draft_is_fitted_against_the_cells_size_over_every_path_to_th
         return SimpleNamespace(values={"mesh.element_size": size}), {}, rows, []
     results = [path(h, 200.0 + 40.0 * h + noise) for h in (1.5, 1.0, 0.5) for noise in (-2, 2)]
     line = long_travel.mesh_limit(results + [path(0.5, 400.0, end=5.0)], scene)
-    assert line == ("D = D∞ + C h through the draft over the last half of the 6 paths that "
-                    "reached 8 in on 3 meshes (h = 1.5, 1, 0.5 in), by least squares: "
-                    "D∞ = 200.0 ± 2.6 lb (one standard error), C = 40.0 lb/in, the paths about "
-                    "the line ±2.0 lb (rms).")
+    assert line.startswith("D = D∞ + C h through the draft over the last half of the 6 paths "
+                           "that reached 8 in on 3 meshes (h = 1.5, 1, 0.5 in), by least "
+                           "squares: D∞ = 200.0 ± 2.6 lb (one standard error), C = 40.0 lb/in, "
+                           "the paths about the line ±2.0 lb (rms). With √h or h² instead of h: "
+                           "D∞ = ")
+    exact = long_travel.mesh_limit([path(h, 200.0 + 40.0 * h**2) for h in (1.5, 1.0, 0.5, 0.25)],
+                                   scene)
+    assert exact.endswith("or 200.0 lb (±0.0 lb rms).")
     assert long_travel.mesh_limit(results[:2], scene) == ""
