@@ -1,7 +1,6 @@
 """The 2-in tool's long travel against the mesh: studies/tine-long-travel.toml (the cap soil)
-or, with --study tine-long-clay, studies/tine-long-clay.toml (the undrained clay), or with
---study tine-long-clay-paths, studies/tine-long-clay-paths.toml (the clay along three paths of
-remeshes on each of its meshes); their tables in docs/chapter8.md.
+or, with --study tine-long-clay-paths, studies/tine-long-clay-paths.toml (the undrained clay
+along three paths of remeshes on each of its meshes); their tables in docs/chapter8.md.
 
 Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summary.json,
 curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
@@ -29,7 +28,7 @@ from soilbin.remesh.remesher import FRESH, LOCAL, MOVED
 from doc_tables import ROOT, write_between_markers
 from study_tables import arguments, at, finished, remeshes, run_study
 
-STUDIES = ("tine-long-travel", "tine-long-clay", "tine-long-clay-paths")
+STUDIES = ("tine-long-travel", "tine-long-clay-paths")
 SIZE = "mesh.element_size"
 ELEMENT = "analysis.element"
 
