@@ -179,6 +179,19 @@ def test_past_ten_curves_a_study_figure_dashes_the_default_colours(tmp_path):
     assert lines[10].get_color() == lines[0].get_color() != lines[1].get_color()
 
 
+def test_a_long_legend_goes_beside_the_axes_not_over_the_curves(tmp_path):
+    """Four cases: the legend inside the axes; twelve: to their right, the figure wider."""
+    from soilbin.app.study_figures import curves_figure
+    study, outcomes = _tine_outcomes(tmp_path)
+    for copies, outside in ((1, False), (3, True)):
+        fig = curves_figure(study.figures[0], outcomes * copies, study, tmp_path)
+        fig.canvas.draw()
+        ax = fig.axes[0]
+        legend_box = ax.get_legend().get_window_extent()
+        assert bool(legend_box.x0 > ax.get_window_extent().x1) == outside
+        assert fig.get_size_inches()[0] == (9.5 if outside else 6.5)
+
+
 def test_the_table_names_labelled_cases(tmp_path):
     from soilbin.app.study import write_table
     study, outcomes = _tine_outcomes(tmp_path)

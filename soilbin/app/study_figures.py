@@ -22,8 +22,18 @@ def _axes(figure, study, xlabel, ylabel):
     return fig, ax
 
 
+#: A legend of more entries than this goes to the right of the axes, the figure widened for it:
+#: inside, fifteen entries covered half the curves.
+LEGEND_INSIDE = 8
+
+
 def _finish(fig, ax):
-    if ax.get_legend_handles_labels()[0]:
+    entries = len(ax.get_legend_handles_labels()[0])
+    if entries > LEGEND_INSIDE:
+        width, height = fig.get_size_inches()
+        fig.set_size_inches(width + 3.0, height)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    elif entries:
         ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
