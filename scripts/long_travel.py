@@ -113,10 +113,8 @@ def over_paths(results, scene):
              "draft at 4 in [lb] | draft over the last half [lb] | "
              "draft over the last sixth [lb] |", "| --- | --- | --- | --- | --- | --- | --- |"]
     for (element, size), paths in groups.items():
-        ended = [(summary, rows) for summary, rows in paths
-                 if rows[-1]["displacement"] >= travel * (1.0 - 1e-9)]
-        halves = [steady_force([SimpleNamespace(**row) for row in rows], 0.5)
-                  for _, rows in ended]
+        ended = [(summary, rows) for summary, rows in paths if _ended(rows, travel)]
+        halves = [_last_half(rows) for _, rows in ended]
         sixths = [summary["steady_draft"] for summary, _ in ended]
         cells = [_mean_range([at(rows, "force", t) for _, rows in paths]) for t in (2.0, 4.0)]
         lines.append(f"| `{element}` | {size:g} | {len(paths)} ({len(ended)}) | "
@@ -136,9 +134,8 @@ def mesh_limit(results, scene):
     on an order that the paths' scatter does not fix. '' with fewer than two meshes or than
     four paths."""
     travel = scene.loading.magnitude
-    levels = [(case.values.get(SIZE, scene.mesh.element_size),
-               steady_force([SimpleNamespace(**row) for row in rows], 0.5))
-              for case, _, rows, _ in results if rows[-1]["displacement"] >= travel * (1 - 1e-9)]
+    levels = [(case.values.get(SIZE, scene.mesh.element_size), _last_half(rows))
+              for case, _, rows, _ in results if _ended(rows, travel)]
     h, draft = np.array(levels).T if levels else (np.empty(0), np.empty(0))
     if len(np.unique(h)) < 2 or len(h) < 4:
         return ""
@@ -160,6 +157,16 @@ def _power_fit(h, draft, order):
     (limit, slope), residual, _, _ = np.linalg.lstsq(design, draft, rcond=None)
     variance = residual[0] / (len(h) - 2) * np.linalg.inv(design.T @ design)
     return limit, slope, np.sqrt(residual[0] / len(h)), np.sqrt(variance[0, 0])
+
+
+def _ended(rows, travel):
+    """Whether a curve reached the scene's whole travel."""
+    return rows[-1]["displacement"] >= travel * (1.0 - 1e-9)
+
+
+def _last_half(rows):
+    """The draft over the last half of a curve's travel."""
+    return steady_force([SimpleNamespace(**row) for row in rows], 0.5)
 
 
 def _mean_range(values):
