@@ -6,6 +6,8 @@ from typing import Callable
 import dolfinx.cpp.mesh
 import dolfinx.mesh
 import gmsh
+import numpy as np
+from dolfinx.cpp.mesh import entities_to_geometry
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
@@ -180,3 +182,22 @@ def _add_physical_groups(dim: int, groups: Groups, numbers, may_be_empty=()) -> 
         tags[group] = gmsh.model.addPhysicalGroup(dim, entities, next(numbers))
         gmsh.model.setPhysicalName(dim, tags[group], group)
     return tags
+
+
+def outward_corners(mesh, facets):
+    """The geometry nodes of the corners of the boundary ``facets`` of a three-dimensional
+    mesh, each facet's seen from outside counter-clockwise: (k, 3) triangles, or (k, 4)
+    quadrilaterals in DOLFINx's tensor order (around: 0, 1, 3, 2)."""
+    facets = np.asarray(facets, dtype=np.int32)
+    x = mesh.geometry.x
+    n_corners = 4 if mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron else 3
+    nodes = entities_to_geometry(mesh._mesh, 2, facets, False)[:, :n_corners]   # 0.5: C++ mesh
+    corners = x[nodes]
+    mesh.topology.create_connectivity(2, 3)
+    to_cell = mesh.topology.connectivity(2, 3)
+    cells = to_cell.array[to_cell.offsets[facets]]       # a boundary facet's one cell
+    inside = x[entities_to_geometry(mesh._mesh, 3, cells, False)].mean(axis=1)
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    inward = np.einsum("ij,ij->i", normal, corners[:, 0] - inside) < 0.0
+    nodes[inward] = nodes[inward][:, [0, 2, 1, 3][:n_corners]]
+    return nodes

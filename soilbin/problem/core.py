@@ -26,6 +26,7 @@ from .frame import Frame
 from .kinematics import kinematics_of
 from .loads import BoundaryLoad, Supports, dead_loads, start_mean_pressure, vector_norm
 from .mesh_quality import MeshQuality
+from .soil_contact import SoilContact
 from .tool import RigidTool
 
 
@@ -56,6 +57,8 @@ class SoilProblem:
         self.border = (self.tool if self.tool is not None and self.tool.force_controlled else
                        self.drive if self.drive is not self.tool and self.drive.indirect else None)
         self.bcs = self.supports.bcs
+        self.soil_contact = (SoilContact(scene.soil_contact, tagged_mesh, disc, self.w, self.bcs)
+                             if scene.soil_contact is not None else None)
         self.newton = self._newton(v)
         # the models' first call after the forms: they compile while its kernels do
         self.points.start()
@@ -98,6 +101,7 @@ class SoilProblem:
         newton = NewtonSolver(self.comm, residual, jacobian, self.w, self.bcs,
                               self.update_material_state, self.scene.solver, self.disc,
                               nodal_terms=tool.nodal_terms if tool else [],
+                              coupled_terms=[self.soil_contact] if self.soil_contact else [],
                               border=self.border,
                               symmetric=not self.kinematics.incremental,
                               symmetric_tangent=symmetric_tangent)
@@ -128,6 +132,8 @@ class SoilProblem:
         self.points.update()
         if self.tool is not None:
             self.tool.update()
+        if self.soil_contact is not None:
+            self.soil_contact.update()
 
     # -- the load stepper's protocol -------------------------------------------------
     def set_load_factor(self, factor):
@@ -170,6 +176,8 @@ class SoilProblem:
         if self.tool is not None and self.tool is not self.drive:
             self.tool.commit()
         self.kinematics.commit(self.points)
+        if self.soil_contact is not None:   # on the committed soil (the mesh moved)
+            self.soil_contact.pair()
 
     def roll_back(self):
         self.w.x.array[:] = self.w_committed.x.array
@@ -235,6 +243,8 @@ class SoilProblem:
         for name, part in self._stateful_parts().items():   # the mesh moves before the points
             part.restore({key.removeprefix(f"{name}/"): value for key, value in state.items()
                           if key.startswith(f"{name}/")})
+        if self.soil_contact is not None:
+            self.soil_contact.pair()
 
     # -- outputs ----------------------------------------------------------------------
     def displacement(self):

@@ -315,6 +315,24 @@ class Remesh(Params):
 
 
 @dataclasses.dataclass(frozen=True)
+class SoilContact(Params):
+    """The soil against itself where its boundary folds over (problem.soil_contact)."""
+    faces: tuple[str, ...] = param(doc="soil boundaries that may touch each other (any two of "
+                                       "them, or one folding onto itself)")
+    k_n: float = magnitude_param(doc="normal penalty stiffness (traction per length); each "
+                                     "face's nodes press the other's triangles, so two faces "
+                                     "in contact are held by 2 k_n")
+    standoff: float = param(0.0, lo=0.0, hi=1.0e20, doc="gap (length) at which the contact "
+                                                         "takes hold: the penalty's penetration "
+                                                         "stays short of the other face")
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not self.faces:
+            raise InputError("faces: name at least one boundary")
+
+
+@dataclasses.dataclass(frozen=True)
 class Scene:
     path: Path
     title: str
@@ -333,6 +351,7 @@ class Scene:
     tractions: tuple = ()
     geostatic: Geostatic = None
     remesh: Remesh = Remesh()
+    soil_contact: SoilContact = None
 
     @property
     def name(self):
@@ -360,6 +379,8 @@ class Scene:
             data["geostatic"] = table(self.geostatic)
         if self.remesh.active:
             data["remesh"] = table(self.remesh)
+        if self.soil_contact is not None:
+            data["soil_contact"] = table(self.soil_contact)
         if self.tool is not None:
             data["tool"] = {"faces": self.tool.faces, "bonded": self.tool.bonded}
             if self.tool.interface is not None:
@@ -372,7 +393,7 @@ class Scene:
 OPTIONAL_TABLES = ("analysis", "solver", "output", "remesh")   # all defaults: --set may create them
 TOP_LEVEL = ("title", "units", "mesh", "regions", "materials", "supports", "loading",
              "analysis", "solver", "output", "headline", "tool", "tractions",
-             "geostatic", "remesh")
+             "geostatic", "remesh", "soil_contact")
 
 
 def _model_name(model):
@@ -475,6 +496,10 @@ def _parse(raw, path):
     named = [(f"supports[{i}].boundary", s.boundary) for i, s in enumerate(supports)]
     named += [(f"tractions[{i}].boundary", t.boundary) for i, t in enumerate(tractions)]
     named += [(f"tool.faces[{i}]", face) for i, face in enumerate(tool.faces if tool else ())]
+    soil_contact = (from_table(SoilContact, raw["soil_contact"], "soil_contact")
+                    if "soil_contact" in raw else None)
+    named += [(f"soil_contact.faces[{i}]", face)
+              for i, face in enumerate(soil_contact.faces if soil_contact else ())]
     if loading.until_collapse and loading.control is not Control.FORCE:
         raise InputError(f"loading.until_collapse = true: only under force control (loading.control "
                          f"= {loading.control.value!r} follows the load past its limit without it)")
@@ -505,6 +530,9 @@ def _parse(raw, path):
     if tool is not None and any(analysis.frame_rotation):
         raise InputError("analysis.frame_rotation: a scene with a tool cannot be rotated (the "
                          "tool's interface works in world components)")
+    if soil_contact is not None and (builder.dimension(mesh) != 3 or any(analysis.frame_rotation)):
+        raise InputError("[soil_contact]: the soil's contact with itself is of three-dimensional "
+                         "meshes, unturned (no analysis.frame_rotation)")
     geostatic = None
     if "geostatic" in raw:
         geostatic = read_geostatic(raw["geostatic"], {m: materials[m] for m in regions.values()})
@@ -527,7 +555,7 @@ def _parse(raw, path):
                  analysis=analysis, solver=solver,
                  output=output,
                  headline=headline, tool=tool, tractions=tractions, geostatic=geostatic,
-                 remesh=remesh)
+                 remesh=remesh, soil_contact=soil_contact)
 
 
 def _check_remesh(dimension, analysis, regions):

@@ -3,11 +3,11 @@ remesher: its boundary as one closed surface of tagged triangles, each turned ou
 import dataclasses
 
 import numpy as np
-from dolfinx.cpp.mesh import entities_to_geometry
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..layout import gather_rows
+from ..meshes.tagged import outward_corners
 from .outline import OutlineError
 
 
@@ -283,16 +283,7 @@ def gather_surface(tagged):
     mesh = tagged.mesh
     owned = mesh.topology.index_map(2).size_local
     keep = tagged.facet_tags.indices < owned
-    facets = tagged.facet_tags.indices[keep].astype(np.int32)
-    x = mesh.geometry.x
-    corners = x[entities_to_geometry(mesh._mesh, 2, facets, False)[:, :3]]   # 0.5: the C++ mesh
-    mesh.topology.create_connectivity(2, 3)
-    to_cell = mesh.topology.connectivity(2, 3)
-    cells = to_cell.array[to_cell.offsets[facets]]       # a boundary facet's one cell
-    inside = x[entities_to_geometry(mesh._mesh, 3, cells, False)[:, :4]].mean(axis=1)
-    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    inward = np.einsum("ij,ij->i", normal, corners[:, 0] - inside) < 0.0
-    corners[inward] = corners[inward][:, [0, 2, 1]]
+    corners = mesh.geometry.x[outward_corners(mesh, tagged.facet_tags.indices[keep])]
     rows = gather_rows(mesh.comm, np.column_stack([corners.reshape(-1, 9),
                                                    tagged.facet_tags.values[keep]]))
     return None if rows is None else Surface.of(rows[:, :9].reshape(-1, 3, 3),

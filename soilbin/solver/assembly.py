@@ -192,21 +192,40 @@ class ElementAssembler:
         on_diagonal[rows[at_diagonal]] = at_diagonal
         if np.any(on_diagonal[diagonal] < 0):
             raise ValueError("a Dirichlet dof outside every element: no diagonal entry for it")
-        # PETSc maps the local indices to global ones in place
+        rmap, cmap = A.getLGMap()
+        self._entries = (rmap.apply(rows), cmap.apply(columns))   # global, for :meth:`couple`
+        # PETSc maps the local indices to global ones in place (and may change them further)
         _check(_LIB.MatSetPreallocationCOOLocal(A.handle, count, rows.ctypes.data,
                                                 columns.ctypes.data),
                "MatSetPreallocationCOOLocal")
         return positions, np.zeros(count), on_diagonal[diagonal]
 
-    def assemble(self, A):
-        """The form at the current coefficients into ``A`` (its values replaced)."""
+    def couple(self, A, rows, columns):
+        """Make the fresh matrix ``A`` (``create_matrix``'s, not yet assembled) the element
+        matrices' pattern and the entries (``rows``, ``columns``, global indices, possibly
+        another rank's) that couple dofs of no common element: their values follow the
+        element sums in :meth:`assemble`'s ``coupling``. (PETSc 3.18 keeps a matrix's old
+        COO map when the COO preallocation is called again: hence a fresh matrix.)"""
+        element_rows, element_columns = self._entries
+        all_rows = np.concatenate([element_rows, rows]).astype(PETSc.IntType)
+        all_columns = np.concatenate([element_columns, columns]).astype(PETSc.IntType)
+        _check(_LIB.MatSetPreallocationCOO(A.handle, len(all_rows), all_rows.ctypes.data,
+                                           all_columns.ctypes.data), "MatSetPreallocationCOO")
+        self._sums = np.zeros(len(all_rows))
+        self._coupled = slice(len(element_rows), len(all_rows))
+
+    def assemble(self, A, coupling=None):
+        """The form at the current coefficients into ``A`` (its values replaced), with the
+        values of the entries :meth:`couple` added."""
         self.tabulate(cpp.fem.pack_coefficients(self._form), cpp.fem.pack_constants(self._form))
+        if coupling is not None:
+            self._sums[self._coupled] = coupling
         self.insert(A)
 
     def tabulate(self, coefficients, constants):
         """Every element matrix summed into the nonzeros, from the coefficients and constants
         DOLFINx packs; the Dirichlet diagonal set to one."""
-        self._sums[:] = 0.0
+        self._sums[:] = 0.0   # the coupling entries too
         for kind, id_, tabulate, entities, permutations, part in self._integrals:
             add_element_matrices(tabulate, entities, self._dofs, coefficients[(kind, id_)],
                                  constants, self._x, self._geometry, permutations, self._fixed,

@@ -101,10 +101,14 @@ class _Clock:
 
 class NewtonSolver:
     def __init__(self, comm, residual, jacobian, w, bcs, before_residual, options, disc,
-                 prefix="soil_", nodal_terms=(), border=None, symmetric=False,
-                 symmetric_tangent=lambda: True):
+                 prefix="soil_", nodal_terms=(), coupled_terms=(), border=None,
+                 symmetric=False, symmetric_tangent=lambda: True):
         """``before_residual()`` runs after ``w`` is set to an iterate, before assembly;
         ``nodal_terms`` add their own entries (``add_residual(b)``, ``add_jacobian(A)``);
+        ``coupled_terms`` add to the residual too and couple dofs of no common element: the
+        matrix is made anew whenever their ``version`` changes, with the entries
+        ``coupling_entries()`` (global rows and columns), and their ``coupling_values()``
+        are added at every assembly;
         ``border``, if given, carries the extra scalar unknown (see the module docstring):
         ``residual()`` → g, ``linearise(b, c)`` fills b, c and returns d,
         ``value``/``set_value(a)``, and, for the ``cp`` line search, ``share`` (g times it
@@ -113,6 +117,8 @@ class NewtonSolver:
         self._L, self._a = fem.form(residual), fem.form(jacobian)
         self._w, self._bcs, self._before = w, bcs, before_residual
         self._nodal_terms = tuple(nodal_terms)
+        self._coupled_terms = tuple(coupled_terms)
+        self._coupling_version = (None,) * len(self._coupled_terms)   # the first assembly couples
         self._held, self._held_fraction = None, 0.0   # hold_out_of_balance
         self._border = border
         self._opts = options
@@ -186,7 +192,7 @@ class NewtonSolver:
         if self._bc_mismatch(x):   # first iterate of a displacement step: lift g - x
             fem.petsc.apply_lifting(b, [self._a], bcs=[self._bcs], x0=[x], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        for term in self._nodal_terms:
+        for term in self._nodal_terms + self._coupled_terms:
             term.add_residual(b)
         if self._held is not None:
             b.axpy(-self._held_fraction, self._held)
@@ -230,11 +236,27 @@ class NewtonSolver:
     def jacobian(self):
         """Assemble the Jacobian at the current iterate (after :meth:`residual`) into
         :attr:`matrix`."""
+        self._recouple()
         A = self.matrix
-        self._assembler.assemble(A)
+        coupling = (np.concatenate([term.coupling_values() for term in self._coupled_terms])
+                    if self._coupled_terms else None)
+        self._assembler.assemble(A, coupling)
         for term in self._nodal_terms:
             term.add_jacobian(A)
         A.assemble()
+
+    def _recouple(self):
+        """A fresh matrix with the coupled terms' entries when they have changed
+        (collective: the terms' versions agree on every rank)."""
+        version = tuple(term.version for term in self._coupled_terms)
+        if version == self._coupling_version:
+            return
+        rows, columns = (np.concatenate(parts) for parts in
+                         zip(*(term.coupling_entries() for term in self._coupled_terms)))
+        matrix = fem.petsc.create_matrix(self._a)
+        self._assembler.couple(matrix, rows, columns)
+        self.matrix.destroy()
+        self.matrix, self._coupling_version = matrix, version
 
     def tangent_solve(self, rhs, out):
         """out = K⁻¹ rhs with the Jacobian at the current ``w`` (its constitutive update run

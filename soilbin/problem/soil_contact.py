@@ -1,0 +1,230 @@
+"""The soil against itself: a node of its boundary pressing a facing triangle of it.
+
+Where the soil's boundary folds over (the heap beside a tool rolling onto the furrow
+behind it) one part of it meets another; without a contact the soil passes through itself
+and the fold check (``remesh.surface``) stops the run. At every commit each mesh node of the
+faces ``[soil_contact] faces`` is paired with the nearest triangle of those faces (a
+quadrilateral facet cut in two) that
+
+- has not the node as a corner,
+- faces it: its outward normal n and the node's (its triangles', area-weighted) more than
+  120 degrees apart (:data:`FACING`),
+- holds the node's projection (barycentric λ >= -:data:`EDGE_TOLERANCE`) within
+  -:data:`BAND_INSIDE` h .. :data:`BAND_OUTSIDE` h of its plane, h its longest edge,
+
+and the pair's λ and n are kept over the step: node-to-surface contact (Wriggers 2006,
+Computational Contact Mechanics, sections 4.1 and 9.1) with the projection frozen for a step.
+With x a node's position (the mesh's node plus the unknown there) and the standoff δ, the gap
+
+    g = (x_p - Σ λ_i x_i) . n - δ
+
+gives the penalty force f = k_n A_p max(-g, 0) on the node along n and -λ_i f on the
+triangle's corners (action and reaction), A_p the node's share of its facets' area (a
+third of a triangle's, a quarter of a quadrilateral's: uniform pressure's nodal forces):
+residual (internal - external) += -f n at the node and +λ_i f n at the corners, Jacobian
++= k_n A_p (c c^T) ⊗ (n n^T) with c = (1, -λ_1, -λ_2, -λ_3) where g < 0 (symmetric). It
+couples the node to the corners of other cells, anywhere in the mesh and on any rank: the
+Newton matrix is made anew with those entries whenever the pairs change (``version``).
+Both faces' nodes are paired (two passes), so two faces in contact are held by 2 k_n per
+area. Frictionless and stateless: a checkpoint, a resume or a remesh pairs anew. Only the
+mesh's vertices take part (the mesh moves with them; the mid-edge nodes of quadratic
+elements carry none of the force), and a supported dof takes none.
+"""
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+from scipy.spatial import cKDTree
+
+from ..meshes.tagged import outward_corners
+
+#: The cosine of the least angle between a node's normal and a triangle's that it can press.
+FACING = -0.5
+#: How far (of its longest edge) past a triangle's edges a node's projection still pairs.
+EDGE_TOLERANCE = 0.05
+#: The band about a triangle's plane (of its longest edge) in which a node pairs with it:
+#: inside the soil (a node already through) and outside.
+BAND_INSIDE, BAND_OUTSIDE = 0.25, 0.5
+#: The triangles whose centroids are nearest a node that it is tried against.
+CANDIDATES = 16
+
+
+class SoilContact:
+    def __init__(self, settings, tagged, disc, w, bcs):
+        """``settings``: the scene's [soil_contact]; ``w`` the unknown (the total displacement
+        or, in updated Lagrangian, the increment since the last commit)."""
+        mesh = disc.mesh
+        self.comm = mesh.comm
+        self._k, self._standoff = settings.k_n, settings.standoff
+        self._tagged, self._w = tagged, w
+        self._tags = [tagged.boundaries[face] for face in settings.faces]
+        nodal = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+        nodes_map = nodal.dofmap.index_map
+        n_cells = mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts
+        self._node_of_geometry = np.empty(len(mesh.geometry.x), dtype=np.int32)
+        self._node_of_geometry[mesh.geometry.dofmap.array] = nodal.dofmap.list.array.reshape(
+            n_cells, -1).ravel()
+        self._owned_nodes = nodes_map.size_local
+        self._node_ids = nodes_map.local_to_global(
+            np.arange(nodes_map.size_local + nodes_map.num_ghosts, dtype=np.int32))
+        self._dofs = disc.vertex_dofs(nodal)                       # local, (nodes, 3)
+        space_map, bs = disc.space.dofmap.index_map, disc.space.dofmap.index_map_bs
+        self._global_dofs = space_map.local_to_global(
+            (self._dofs // bs).ravel()).reshape(self._dofs.shape) * bs + self._dofs % bs
+        fixed = np.zeros(len(w.x.array), dtype=bool)
+        for bc in bcs:
+            fixed[bc.dof_indices()[0]] = True
+        self._fixed = fixed[self._dofs]
+        self.version = 0
+        self._pairs = None
+        self.pair()
+
+    # -- pairing, at every commit -----------------------------------------------------------
+    def _gathered_surface(self):
+        """Every rank's part of the faces, gathered on all: the nodes (sorted by position, so
+        that any partition pairs alike) with their global id, position on the mesh, global
+        dofs and supported flags; the facets (m, 3 or 4 corners) into them."""
+        tags = self._tagged.facet_tags
+        owned = self._tagged.mesh.topology.index_map(2).size_local
+        keep = (tags.indices < owned) & np.isin(tags.values, self._tags)
+        facets = self._node_of_geometry[outward_corners(self._tagged.mesh, tags.indices[keep])]
+        nodes = np.unique(facets)
+        x = self._tagged.mesh.geometry.x[self._geometry_of(nodes)]
+        rows = np.column_stack([self._node_ids[nodes], x, self._global_dofs[nodes],
+                                self._fixed[nodes]])
+        rows = np.concatenate(self.comm.allgather(rows))
+        ids, first = np.unique(rows[:, 0].astype(np.int64), return_index=True)
+        rows = rows[first]
+        order = np.lexsort(rows[:, 3:0:-1].T)
+        rows, ids = rows[order], ids[order]
+        by_id = np.argsort(ids)
+        corner_ids = np.concatenate(self.comm.allgather(self._node_ids[facets]))
+        facets = by_id[np.searchsorted(ids[by_id], corner_ids)]
+        facets = facets[np.lexsort(np.sort(facets, axis=1).T[::-1])]
+        return (ids, rows[:, 1:4], rows[:, 4:7].astype(PETSc.IntType), rows[:, 7:10] > 0.5,
+                facets)
+
+    def _geometry_of(self, nodes):
+        geometry = np.empty(len(self._node_ids), dtype=np.int32)
+        geometry[self._node_of_geometry] = np.arange(len(self._node_of_geometry))
+        return geometry[nodes]
+
+    def pair(self):
+        """Pair the nodes this rank owns with the triangles they face, from the current
+        positions (collective)."""
+        ids, x_mesh, dofs, fixed, facets = self._gathered_surface()
+        mine = np.flatnonzero(np.isin(ids, self._node_ids[:self._owned_nodes]))
+        local = np.searchsorted(self._node_ids[:self._owned_nodes], ids[mine])
+        self._mine, self._mine_local = mine, local
+        self._gathered_order = np.concatenate(self.comm.allgather(mine))
+        self._x_mesh = x_mesh
+        x = x_mesh + self._nodal_unknown()
+        n_corners = facets.shape[1]
+        triangles = facets if n_corners == 3 else facets[:, [[0, 1, 3], [0, 3, 2]]].reshape(-1, 3)
+        corners = x[triangles]
+        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        area = np.linalg.norm(normal, axis=1) / 2.0
+        normal /= 2.0 * area[:, None]
+        share = area.reshape(len(facets), -1).sum(axis=1) / n_corners
+        node_area = np.zeros(len(x))   # a facet's area shared by its corners (lumped, P1)
+        node_normal = np.zeros((len(x), 3))
+        for k in range(n_corners):
+            np.add.at(node_area, facets[:, k], share)
+        for k in range(3):
+            np.add.at(node_normal, triangles[:, k], area[:, None] * normal)
+        node_normal /= np.maximum(np.linalg.norm(node_normal, axis=1), 1e-300)[:, None]
+        longest = np.max([np.linalg.norm(corners[:, k] - corners[:, k - 1], axis=1)
+                          for k in range(3)], axis=0)
+
+        count = min(CANDIDATES, len(triangles))
+        candidates = (cKDTree(corners.mean(axis=1)).query(x[mine], k=count)[1].reshape(
+            len(mine), count) if len(mine) and count else np.zeros((len(mine), 0), dtype=int))
+        a, b, c = (corners[candidates, k] for k in range(3))
+        n_c = normal[candidates]
+        p = x[mine][:, None, :]
+        s = np.einsum("pkj,pkj->pk", p - a, n_c)                     # signed distance
+        weights = _barycentric(p - s[..., None] * n_c, a, b, c)
+        h = longest[candidates]
+        valid = ((triangles[candidates] != mine[:, None, None]).all(axis=2)
+                 & (np.einsum("pj,pkj->pk", node_normal[mine], n_c) < FACING)
+                 & (weights >= -EDGE_TOLERANCE).all(axis=2)
+                 & (s > -BAND_INSIDE * h) & (s < BAND_OUTSIDE * h))
+        best = np.argmin(np.where(valid, np.abs(s), np.inf), axis=1)
+        paired = valid[np.arange(len(mine)), best] if count else np.zeros(0, dtype=bool)
+        chosen = candidates[paired, best[paired]]
+        lam = np.clip(weights[paired, best[paired]], 0.0, None)
+        lam /= lam.sum(axis=1, keepdims=True)
+        self._node = mine[paired]
+        self._corners = triangles[chosen]
+        self._lambda, self._normal = lam, normal[chosen]
+        self._area = node_area[self._node]
+        self._c = np.column_stack([np.ones(len(lam)), -lam])                    # (pairs, 4)
+        self._pair_nodes = np.column_stack([self._node, self._corners])         # (pairs, 4)
+        pair_dofs = dofs[self._pair_nodes].reshape(-1, 12)
+        pair_fixed = fixed[self._pair_nodes].reshape(-1, 12)
+        self._entry_rows = np.broadcast_to(pair_dofs[:, :, None], (len(lam), 12, 12))
+        self._entry_columns = np.broadcast_to(pair_dofs[:, None, :], (len(lam), 12, 12))
+        self._entries = ~pair_fixed[:, :, None] & ~pair_fixed[:, None, :]
+        self._pair_dofs = pair_dofs
+        signature = np.column_stack([ids[self._node], ids[self._corners]])
+        changed = self._pairs is None or not np.array_equal(signature, self._pairs)
+        if self.comm.allreduce(changed, op=MPI.LOR):
+            self.version += 1
+        self._pairs = signature
+        self._force = np.zeros(len(lam))
+
+    def _nodal_unknown(self):
+        """The unknown at every node of the faces (n, 3), gathered from the ranks owning them."""
+        mine = self._w.x.array[self._dofs[self._mine_local]]
+        u = np.empty((len(self._x_mesh), 3))
+        u[self._gathered_order] = np.concatenate(self.comm.allgather(mine)).reshape(-1, 3)
+        return u
+
+    # -- the Newton solver's coupled term ---------------------------------------------------
+    def update(self):
+        """The penalty forces at the current iterate (call once per iterate; collective)."""
+        x = self._x_mesh + self._nodal_unknown()
+        on_triangle = np.einsum("pk,pkj->pj", self._lambda, x[self._corners])
+        gap = np.einsum("pj,pj->p", x[self._node] - on_triangle, self._normal) - self._standoff
+        self._force = self._k * self._area * np.maximum(-gap, 0.0)
+
+    def add_residual(self, b):
+        """Residual += -f c_i n at the pair's node (i = 0) and corners (collective)."""
+        values = -self._force[:, None, None] * self._c[:, :, None] * self._normal[:, None, :]
+        b.setValues(self._pair_dofs.ravel(), values.ravel(), addv=PETSc.InsertMode.ADD_VALUES)
+        b.assemblyBegin()
+        b.assemblyEnd()
+
+    def coupling_entries(self):
+        """The Jacobian's entries of the pairs (global rows, columns): the node's and its
+        triangle's corners' dofs, supported ones left out."""
+        return self._entry_rows[self._entries], self._entry_columns[self._entries]
+
+    def coupling_values(self):
+        """The values of :meth:`coupling_entries` at the current iterate."""
+        stiffness = self._k * self._area * (self._force > 0.0)
+        cc = self._c[:, :, None] * self._c[:, None, :]
+        nn = self._normal[:, :, None] * self._normal[:, None, :]
+        blocks = (stiffness[:, None, None, None, None] * cc[:, :, None, :, None]
+                  * nn[:, None, :, None, :]).reshape(-1, 12, 12)
+        return blocks[self._entries]
+
+    def force(self):
+        """The total penalty force pressing the soil's faces together (summed over ranks)."""
+        return self.comm.allreduce(float(self._force.sum()), op=MPI.SUM)
+
+    def touching(self):
+        """The number of nodes pressing a triangle (summed over ranks)."""
+        return self.comm.allreduce(int((self._force > 0.0).sum()), op=MPI.SUM)
+
+
+def _barycentric(q, a, b, c):
+    """The barycentric coordinates (..., 3) of the points q in the triangles a b c (..., 3)
+    whose plane they lie in."""
+    v0, v1, v2 = b - a, c - a, q - a
+    d00, d01, d11 = (np.einsum("...j,...j->...", u, v) for u, v in ((v0, v0), (v0, v1), (v1, v1)))
+    d20, d21 = (np.einsum("...j,...j->...", v2, v) for v in (v0, v1))
+    denominator = d00 * d11 - d01 * d01
+    second = (d11 * d20 - d01 * d21) / denominator
+    third = (d00 * d21 - d01 * d20) / denominator
+    return np.stack([1.0 - second - third, second, third], axis=-1)
