@@ -10,6 +10,7 @@ from scipy.sparse import coo_matrix
 
 from soilbin.errors import InputError
 from soilbin.records.scene import load_scene
+from conftest import last_json, soilbin_cli
 
 E, LENGTH, GAP, STANDOFF, K_N = 1000.0, 1.0, 0.05, 0.01, 2.0e4
 
@@ -122,6 +123,21 @@ def test_blocks_pressed_together_carry_the_closed_form_force(tmp_path, blocks_sc
         expected = closed_form_force(row["displacement"])
         assert row["force"] == pytest.approx(expected, rel=1e-9, abs=1e-9 * closed_form_force(0.1))
     assert [row["force"] > 1.0 for row in rows] == [False] * 4 + [True] * 6   # d > 0.04
+
+
+@pytest.mark.slow
+def test_blocks_pressed_together_under_two_ranks(tmp_path, blocks_scene):
+    """The blocks' faces on two ranks: a pair's node and triangle on different ranks (the
+    residual and Jacobian entries of another rank's rows), the same force."""
+    done = soilbin_cli("run", blocks_scene, "--json", "--out", tmp_path / "n2", mpi_ranks=2)
+    assert done.returncode == 0, done.stderr
+    assert last_json(done.stdout)["n_ranks"] == 2
+    with open(tmp_path / "n2" / "curve.csv") as f:
+        rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    assert len(rows) == 10
+    for row in rows:
+        expected = closed_form_force(row["displacement"])
+        assert row["force"] == pytest.approx(expected, rel=1e-9, abs=1e-9 * closed_form_force(0.1))
 
 
 def test_the_contact_jacobian_is_the_derivative_of_its_residual(blocks_scene):

@@ -12,6 +12,7 @@ import basix.cell
 import numpy as np
 import ufl
 from dolfinx import fem
+from mpi4py import MPI
 
 from ..errors import ReturnMapError
 from ..layout import POINTS
@@ -212,8 +213,12 @@ class MaterialPoints:
         return all_symmetric(self._tangent, self._comm)
 
     def _at_committed_state(self):
-        return (self._converged_tangent is not None
-                and np.array_equal(self._w.x.array, self._w_committed.x.array))
+        """Whether the iterate is the committed state on every rank (collective: the ranks
+        take the same branch of :meth:`update`, whose other gathers failures; a rank whose
+        soil has not moved, e.g. a block not yet pressed, is not at it alone)."""
+        return self._comm.allreduce(
+            self._converged_tangent is not None
+            and bool(np.array_equal(self._w.x.array, self._w_committed.x.array)), op=MPI.LAND)
 
     def expression(self, ufl_expression):
         """Compile a UFL expression at the quadrature points (for :meth:`evaluate`)."""
