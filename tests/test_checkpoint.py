@@ -99,8 +99,8 @@ def resume_column(stopped, out, *overrides):
 
 def test_resume_refuses_another_scene(stopped_column, tmp_path):
     with pytest.raises(InputError, match=r"differs from the checkpoint's in materials\.soil\.E "
-                                         r"\(only title, solver, output, headline, remesh\.retries "
-                                         r"may change\)"):
+                                         r"\(only title, solver, output, headline, remesh\.retries, "
+                                         r"soil_contact may change\)"):
         resume_column(stopped_column, tmp_path, "materials.soil.E=5000")
 
 

@@ -192,7 +192,7 @@ def test_a_patch_pinched_at_a_point_is_cut_into_discs_and_meshed(tmp_path):
 
 def test_a_soil_folded_onto_itself_is_named_where_gmsh_cannot_fill_it(tmp_path):
     """A boundary that passes through itself (the heave beside the tine after 5.6 in curled
-    onto the soil's face at the tool's side: there is no self-contact) cannot be filled with
+    onto the soil's face at the tool's side) cannot be filled with
     tetrahedra; the remesh's message says where it crosses, between which groups."""
     from mpi4py import MPI
     from soilbin.remesh.mesher import mesh_surface
@@ -206,7 +206,7 @@ def test_a_soil_folded_onto_itself_is_named_where_gmsh_cannot_fill_it(tmp_path):
     assert len(points) > 0 and np.allclose(points[:, 2], 0.0)
     assert {tuple(t) for t in crossed} <= {(6, 5), (5, 6)}
     assert len(Surface.of(*refined_box_surface(4)).crossings()[0]) == 0
-    with pytest.raises(RuntimeError, match=r"folded onto itself \(no self-contact\), its "
+    with pytest.raises(RuntimeError, match=r"folded onto itself, its "
                                            r"boundary (top|bottom) passing through (bottom|top) at"):
         mesh_surface(MPI.COMM_SELF, surface, cube_sizes(0.3), {"soil": 1},
                      {"bottom": 5, "top": 6, **{f"face{k}": k for k in range(1, 5)}},
@@ -250,7 +250,7 @@ def test_a_crumple_of_the_surface_joins_a_larger_patch_of_its_group():
 
 def test_a_run_stops_at_the_first_step_where_its_soil_folds_onto_itself(tmp_path):
     """After every converged step a remeshing 3D run checks that the soil's boundary does not
-    pass through itself (soilbin has no self-contact, gmsh could not fill it): the block as
+    pass through itself (the scene has no [soil_contact], gmsh could not fill it): the block as
     built passes; with one corner of its top pushed down through its bottom, the check says
     where, as a RemeshError (which ends the run with its steps on disk)."""
     from types import SimpleNamespace
@@ -270,8 +270,8 @@ def test_a_run_stops_at_the_first_step_where_its_soil_folds_onto_itself(tmp_path
     on_top = vertices[np.isclose(x[vertices, 2], top)]
     inner = on_top[np.argmin(np.linalg.norm(x[on_top, :2] - centre, axis=1))]
     x[inner, 2] = bottom - (top - bottom)
-    with pytest.raises(RemeshError, match=r"after step 3 the soil has folded onto itself "
-                                          r"\(no self-contact\), its boundary .* passing through"):
+    with pytest.raises(RemeshError, match=r"after step 3 the soil has folded onto itself, its "
+                                          r"boundary .* passing through .*\(no \[soil_contact\]"):
         remeshing.check_folding(problem, step)
 
 

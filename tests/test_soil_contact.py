@@ -125,6 +125,23 @@ def test_blocks_pressed_together_carry_the_closed_form_force(tmp_path, blocks_sc
     assert [row["force"] > 1.0 for row in rows] == [False] * 4 + [True] * 6   # d > 0.04
 
 
+def test_a_run_stopped_without_soil_contact_resumes_with_it(tmp_path, blocks_scene):
+    """[soil_contact] keeps no state: a run may take it up on --resume (one stopped where its
+    soil folded onto itself goes on with it); the blocks, stopped after 2 steps without it,
+    carry the closed-form force from then on."""
+    from soilbin.app.run import run_scene
+    from test_checkpoint import stop_after
+    without = blocks_scene.with_name("without.toml")
+    without.write_text(SCENE[:SCENE.index("[soil_contact]")])
+    run_scene(load_scene(without), tmp_path / "stopped", progress=stop_after(2))
+    summary = run_scene(load_scene(blocks_scene), tmp_path / "resumed",
+                        resume=tmp_path / "stopped")
+    assert summary["status"] == "complete" and summary["resumed_after_step"] == 2
+    with open(tmp_path / "resumed" / "curve.csv") as f:
+        forces = [float(row["force"]) for row in csv.DictReader(f)]
+    assert forces[-1] == pytest.approx(closed_form_force(0.1), rel=1e-9)
+
+
 @pytest.mark.slow
 def test_blocks_pressed_together_under_two_ranks(tmp_path, blocks_scene):
     """The blocks' faces on two ranks: a pair's node and triangle on different ranks (the

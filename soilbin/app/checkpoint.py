@@ -39,8 +39,9 @@ FOLDER = "checkpoint"
 #: The stored arrays' prefix of the remeshing's state.
 REMESH = "remesh"
 #: Scene tables and keys a resumed run may change: how it solves, what it writes and reports,
-#: and how often a remesh that failed is tried again.
-FREE = ("title", "solver", "output", "headline", "remesh.retries")
+#: how often a remesh that failed is tried again, and the soil's contact with itself (it
+#: keeps no state: a run stopped where the soil folded onto itself goes on with it).
+FREE = ("title", "solver", "output", "headline", "remesh.retries", "soil_contact")
 #: Tolerance of the same point of the mesh in two runs, relative to the mesh's size (its
 #: coordinates are the same; an interpolated one differs by round-off).
 SAME_MESH = 1e-12

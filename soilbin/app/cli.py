@@ -82,9 +82,9 @@ def _parser(point_details=True):
                           "memory of all ranks): for long runs")
     run.add_argument("--resume", type=folder, metavar="FOLDER",
                      help="go on from the last converged step of the stopped run in FOLDER (its "
-                          "checkpoint/; the same scene but for [solver], [output], [headline] "
-                          "and remesh.retries, any number of ranks); the new --out starts "
-                          "with its steps")
+                          "checkpoint/; the same scene but for [solver], [output], [headline], "
+                          "[soil_contact] and remesh.retries, any number of ranks); the new "
+                          "--out starts with its steps")
 
     sub.add_parser("list", help="list the scenes in scenes/ with their titles",
                    description="List the scenes shipped in the project's scenes/ folder.")

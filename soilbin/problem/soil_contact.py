@@ -3,8 +3,8 @@
 Where the soil's boundary folds over (the heap beside a tool rolling onto the furrow
 behind it) one part of it meets another; without a contact the soil passes through itself
 and the fold check (``remesh.surface``) stops the run. At every commit each mesh node of the
-faces ``[soil_contact] faces`` is paired with the nearest triangle of those faces (a
-quadrilateral facet cut in two) that
+faces ``[soil_contact] faces`` is paired with every triangle of those faces (a
+quadrilateral facet cut in two) near it that
 
 - has not the node as a corner,
 - faces it: its outward normal n and the node's (its triangles', area-weighted) more than
@@ -20,7 +20,8 @@ With x a node's position (the mesh's node plus the unknown there) and the stando
 
 gives the penalty force f = k_n A_p max(-g, 0) on the node along n and -λ_i f on the
 triangle's corners (action and reaction), A_p the node's share of its facets' area (a
-third of a triangle's, a quarter of a quadrilateral's: uniform pressure's nodal forces):
+third of a triangle's, a quarter of a quadrilateral's: uniform pressure's nodal forces)
+divided among the node's pairs:
 residual (internal - external) += -f n at the node and +λ_i f n at the corners, Jacobian
 += k_n A_p (c c^T) ⊗ (n n^T) with c = (1, -λ_1, -λ_2, -λ_3) where g < 0 (symmetric). It
 couples the node to the corners of other cells, anywhere in the mesh and on any rank: the
@@ -43,8 +44,11 @@ FACING = -0.5
 #: How far (of its longest edge) past a triangle's edges a node's projection still pairs.
 EDGE_TOLERANCE = 0.05
 #: The band about a triangle's plane (of its longest edge) in which a node pairs with it:
-#: inside the soil (a node already through) and outside.
-BAND_INSIDE, BAND_OUTSIDE = 0.25, 0.5
+#: inside the soil and outside. Inside it is thin: a node comes to a face from outside
+#: and the penalty holds it there, while a node beyond the band's inside is one of the
+#: far side of a thin sheet of soil (0.25 paired the top of a 1-in roof of soil over the
+#: tine's furrow with its underside, and Newton diverged).
+BAND_INSIDE, BAND_OUTSIDE = 0.05, 0.5
 #: The triangles whose centroids are nearest a node that it is tried against.
 CANDIDATES = 16
 
@@ -149,15 +153,16 @@ class SoilContact:
                  & (np.einsum("pj,pkj->pk", node_normal[mine], n_c) < FACING)
                  & (weights >= -EDGE_TOLERANCE).all(axis=2)
                  & (s > -BAND_INSIDE * h) & (s < BAND_OUTSIDE * h))
-        best = np.argmin(np.where(valid, np.abs(s), np.inf), axis=1)
-        paired = valid[np.arange(len(mine)), best] if count else np.zeros(0, dtype=bool)
-        chosen = candidates[paired, best[paired]]
-        lam = np.clip(weights[paired, best[paired]], 0.0, None)
+        node, which = np.nonzero(valid)
+        chosen = candidates[node, which]
+        lam = np.clip(weights[node, which], 0.0, None)
         lam /= lam.sum(axis=1, keepdims=True)
-        self._node = mine[paired]
+        self._node = mine[node]
         self._corners = triangles[chosen]
         self._lambda, self._normal = lam, normal[chosen]
-        self._area = node_area[self._node]
+        # a node's area shared by its pairs: on a flat face the pairs of a node over a corner
+        # press as one; in a valley each of its sides takes a share
+        self._area = node_area[self._node] / np.bincount(node, minlength=len(mine))[node]
         self._c = np.column_stack([np.ones(len(lam)), -lam])                    # (pairs, 4)
         self._pair_nodes = np.column_stack([self._node, self._corners])         # (pairs, 4)
         pair_dofs = dofs[self._pair_nodes].reshape(-1, 12)

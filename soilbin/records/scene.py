@@ -390,7 +390,8 @@ class Scene:
         return toml_out.dumps(data)
 
 
-OPTIONAL_TABLES = ("analysis", "solver", "output", "remesh")   # all defaults: --set may create them
+#: Tables --set may create: all defaults, or (soil_contact) keys --set gives in turn.
+OPTIONAL_TABLES = ("analysis", "solver", "output", "remesh", "soil_contact")
 TOP_LEVEL = ("title", "units", "mesh", "regions", "materials", "supports", "loading",
              "analysis", "solver", "output", "headline", "tool", "tractions",
              "geostatic", "remesh", "soil_contact")

@@ -153,8 +153,11 @@ class Remeshing:
         folded = problem.comm.bcast(surface.folded(problem.tagged.boundaries)
                                      if surface is not None else None, root=0)
         if folded:
-            raise RemeshError(f"after step {record.step} {folded}: the run stops at the first "
-                              "step where it does")
+            hint = ("no [soil_contact]: the soil passes through itself" if
+                    problem.soil_contact is None else "through [soil_contact]'s penalty: a "
+                    "larger soil_contact.k_n or shorter steps may hold it")
+            raise RemeshError(f"after step {record.step} {folded} ({hint}): the run stops at "
+                              "the first step where it does")
 
     def remesh(self, problem, record):
         """The problem on a new mesh of the deformed soil, in equilibrium at ``record``'s load

@@ -147,7 +147,7 @@ class Surface:
 
     def crossings(self):
         """Where an edge of the surface passes through a triangle it does not touch (a soil
-        folded onto itself: soilbin has no self-contact): the points (k, 3) and the tags of
+        folded onto itself): the points (k, 3) and the tags of
         the edge's triangle and of the triangle crossed (k, 2)."""
         corners = self.points[self.triangles]
         a, b = _overlapping_boxes(corners.min(axis=1), corners.max(axis=1))
@@ -162,16 +162,15 @@ class Surface:
         return np.concatenate(points), np.concatenate(tags).astype(int)
 
     def folded(self, boundaries):
-        """Where the soil has folded onto itself (its boundary passes through itself, which
-        the soil does not feel: no self-contact), in words, or '' (``boundaries``: group name
-        -> tag)."""
+        """Where the soil has folded onto itself (its boundary passes through itself), in
+        words, or '' (``boundaries``: group name -> tag)."""
         points, tags = self.crossings()
         if len(points) == 0:
             return ""
         name = {tag: group for group, tag in boundaries.items()}
         x, y, z = points[0]
         a, b = (name.get(int(t), str(t)) for t in tags[0])
-        return (f"the soil has folded onto itself (no self-contact), its boundary {a} passing "
+        return (f"the soil has folded onto itself, its boundary {a} passing "
                 f"through {b} at ({x:.4g}, {y:.4g}, {z:.4g}), {len(points)} crossing(s)")
 
     def on_grid(self, grain):
