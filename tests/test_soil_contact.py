@@ -123,6 +123,8 @@ def test_blocks_pressed_together_carry_the_closed_form_force(tmp_path, blocks_sc
         expected = closed_form_force(row["displacement"])
         assert row["force"] == pytest.approx(expected, rel=1e-9, abs=1e-9 * closed_form_force(0.1))
     assert [row["force"] > 1.0 for row in rows] == [False] * 4 + [True] * 6   # d > 0.04
+    for row in rows:   # the pairs' forces, both passes, carry all the load
+        assert row["soil_contact_force"] == pytest.approx(row["force"], rel=1e-9, abs=1e-9)
 
 
 def test_a_run_stopped_without_soil_contact_resumes_with_it(tmp_path, blocks_scene):
@@ -138,8 +140,9 @@ def test_a_run_stopped_without_soil_contact_resumes_with_it(tmp_path, blocks_sce
                         resume=tmp_path / "stopped")
     assert summary["status"] == "complete" and summary["resumed_after_step"] == 2
     with open(tmp_path / "resumed" / "curve.csv") as f:
-        forces = [float(row["force"]) for row in csv.DictReader(f)]
-    assert forces[-1] == pytest.approx(closed_form_force(0.1), rel=1e-9)
+        rows = list(csv.DictReader(f))
+    assert float(rows[-1]["force"]) == pytest.approx(closed_form_force(0.1), rel=1e-9)
+    assert [row["soil_contact_force"] == "" for row in rows] == [True] * 2 + [False] * 8
 
 
 @pytest.mark.slow

@@ -15,6 +15,7 @@ COLUMNS = {
     "lift": ("lift", "force"),
     "front_volumetric_strain": ("volumetric strain in front of the tool", None),
     "mesh_quality": ("least scaled Jacobian of the mesh", None),
+    "soil_contact_force": ("force of the soil pressing on itself", "force"),
     "newton_iterations": ("Newton iterations", None),
     "cuts": ("step cuts", None),
     "wall_s": ("wall time", "time"),

@@ -20,11 +20,12 @@ from .interrupt import deferred
 from .xdmf import XdmfSeries
 
 #: Every column a curve.csv may have; a run writes the step, what its problem observes
-#: (a loaded boundary: pressure; a tool: lift and the soil's volume change ahead of it)
-#: and Newton's effort.
+#: (a loaded boundary: pressure; a tool: lift and the soil's volume change ahead of it;
+#: the force of the soil pressing on itself) and Newton's effort.
 CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure", "lift",
-                 "front_volumetric_strain", "mesh_quality", "newton_iterations", "cuts", "wall_s")
-OBSERVED = ("pressure", "lift", "front_volumetric_strain", "mesh_quality")
+                 "front_volumetric_strain", "mesh_quality", "soil_contact_force",
+                 "newton_iterations", "cuts", "wall_s")
+OBSERVED = ("pressure", "lift", "front_volumetric_strain", "mesh_quality", "soil_contact_force")
 #: The file of the remeshes' reports (a remeshing run).
 REMESHES = "remeshes.csv"
 #: The XDMF topology of each cell the soil's meshes and the tool's faces are made of.
@@ -234,8 +235,9 @@ class RunFolder:
         self.records.append(record)
         if self._rank0:
             values = {**dataclasses.asdict(record), **record.columns}
+            # a resumed run's earlier steps lack what it took up (soil_contact_force): blank
             with deferred(), open(self.path / "curve.csv", "a", newline="") as f:
-                csv.writer(f).writerow([_text(values[column]) for column in self._columns])
+                csv.writer(f).writerow([_text(values.get(column, "")) for column in self._columns])
 
     def writes_fields(self, record):
         """Fields are written every ``every`` steps, at the stated loads and at the end."""

@@ -125,7 +125,8 @@ class SoilProblem:
     @property
     def curve_columns(self):
         """Names of the values each observation carries beside displacement and force."""
-        return self.drive.columns + ("mesh_quality",) * (self.quality is not None)
+        return (self.drive.columns + ("mesh_quality",) * (self.quality is not None)
+                + ("soil_contact_force",) * (self.soil_contact is not None))
 
     def update_material_state(self):
         """The constitutive and interface updates of one Newton iterate."""
@@ -189,15 +190,17 @@ class SoilProblem:
     def observe(self):
         """Displacement and force of the driven boundary or tool along the loading direction,
         and its further values (:attr:`curve_columns`): the mesh's least scaled Jacobian
-        too when the mesh moves; collective. The state observed is a converged one: Newton's
+        too when the mesh moves, and the soil contact's force; collective. The state observed is a converged one: Newton's
         residual floor keeps above the rounding of the force it carries
         (:meth:`~soilbin.solver.newton.NewtonSolver.carry`)."""
         observation = self.drive.observe()
         self.newton.carry(observation.force)
-        if self.quality is None:
-            return observation
-        return dataclasses.replace(observation, columns={**observation.columns,
-                                                         "mesh_quality": self.quality.minimum()})
+        columns = dict(observation.columns)
+        if self.quality is not None:
+            columns["mesh_quality"] = self.quality.minimum()
+        if self.soil_contact is not None:
+            columns["soil_contact_force"] = self.soil_contact.committed_force
+        return dataclasses.replace(observation, columns=columns)
 
     # -- checkpoints ------------------------------------------------------------------
     def _stateful_parts(self):

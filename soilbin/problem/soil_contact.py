@@ -80,7 +80,9 @@ class SoilContact:
             fixed[bc.dof_indices()[0]] = True
         self._fixed = fixed[self._dofs]
         self.version = 0
-        self._pairs = None
+        self._pairs, self._force = None, np.zeros(0)
+        #: The total force of the soil pressing on itself at the last commit.
+        self.committed_force = 0.0
         self.pair()
 
     # -- pairing, at every commit -----------------------------------------------------------
@@ -116,6 +118,7 @@ class SoilContact:
     def pair(self):
         """Pair the nodes this rank owns with the triangles they face, from the current
         positions (collective)."""
+        self.committed_force = self.force()
         ids, x_mesh, dofs, fixed, facets = self._gathered_surface()
         mine = np.flatnonzero(np.isin(ids, self._node_ids[:self._owned_nodes]))
         local = np.searchsorted(self._node_ids[:self._owned_nodes], ids[mine])
