@@ -190,9 +190,9 @@ class SoilProblem:
     def observe(self):
         """Displacement and force of the driven boundary or tool along the loading direction,
         and its further values (:attr:`curve_columns`): the mesh's least scaled Jacobian
-        too when the mesh moves, and the soil contact's force; collective. The state observed is a converged one: Newton's
-        residual floor keeps above the rounding of the force it carries
-        (:meth:`~soilbin.solver.newton.NewtonSolver.carry`)."""
+        too when the mesh moves, and the soil contact's force; collective. The state observed
+        is a converged one: Newton's residual floor keeps above the rounding of the force it
+        carries (:meth:`~soilbin.solver.newton.NewtonSolver.carry`)."""
         observation = self.drive.observe()
         self.newton.carry(observation.force)
         columns = dict(observation.columns)

@@ -118,9 +118,11 @@ def compile_loops():
 class ElementAssembler:
     """Assembles the bilinear form ``form`` (on ``space``, Dirichlet conditions ``bcs``)
     into the matrix ``A`` made for it by ``dolfinx.fem.petsc.create_matrix``, whose
-    preallocation it replaces by the COO pattern of the form's element matrices."""
+    preallocation it replaces by the COO pattern of the form's element matrices; if
+    ``coupled``, it keeps that pattern for :meth:`couple`."""
 
-    def __init__(self, form, space, bcs, A):
+    def __init__(self, form, space, bcs, A, coupled=False):
+        self._coupled_pattern = coupled
         if set(form.integral_types) - set(INTEGRAL_TYPES):
             raise ValueError("the element assembler takes cell and exterior-facet integrals")
         if space.element.needs_dof_transformations:
@@ -192,8 +194,9 @@ class ElementAssembler:
         on_diagonal[rows[at_diagonal]] = at_diagonal
         if np.any(on_diagonal[diagonal] < 0):
             raise ValueError("a Dirichlet dof outside every element: no diagonal entry for it")
-        rmap, cmap = A.getLGMap()
-        self._entries = (rmap.apply(rows), cmap.apply(columns))   # global, for :meth:`couple`
+        if self._coupled_pattern:   # global, for :meth:`couple`
+            rmap, cmap = A.getLGMap()
+            self._entries = (rmap.apply(rows), cmap.apply(columns))
         # PETSc maps the local indices to global ones in place (and may change them further)
         _check(_LIB.MatSetPreallocationCOOLocal(A.handle, count, rows.ctypes.data,
                                                 columns.ctypes.data),

@@ -124,7 +124,8 @@ class NewtonSolver:
         self._opts = options
         self._b = fem.petsc.create_vector(self._L)
         self.matrix = fem.petsc.create_matrix(self._a)
-        self._assembler = ElementAssembler(self._a, w.function_space, bcs, self.matrix)
+        self._assembler = ElementAssembler(self._a, w.function_space, bcs, self.matrix,
+                                           coupled=bool(coupled_terms))
         self._dx = w.vector.duplicate()
         self._gap = w.vector.duplicate()
         # 1 on the rows of the equilibrium equations, 0 on the prescribed ones: those hold the
