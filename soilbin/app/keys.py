@@ -9,8 +9,8 @@ import typing
 from ..meshes import BUILDERS
 from ..models import MODELS
 from ..records.geostatic import Geostatic
-from ..records.scene import (Analysis, HeadlineResult, Loading, Output, Remesh, Solver, Support,
-                             Tool, Traction)
+from ..records.scene import (Analysis, HeadlineResult, Loading, Output, Remesh, SoilContact,
+                             Solver, Support, Tool, Traction)
 from .study import Figure, RunOptions, Table
 
 #: What the key reference shows as the default of a key that must be given.
@@ -93,7 +93,8 @@ def reference():
                for name, cls in MODELS.items()]
     for table, cls in (("loading", Loading), ("analysis", Analysis), ("solver", Solver),
                        ("output", Output), ("remesh", Remesh), ("tool", Tool),
-                       ("geostatic", Geostatic), ("supports", Support), ("tractions", Traction),
+                       ("soil_contact", SoilContact), ("geostatic", Geostatic),
+                       ("supports", Support), ("tractions", Traction),
                        ("headline", HeadlineResult)):
         prefix = {"supports": "supports.N", "tractions": "tractions.N",
                   "headline": "headline.NAME"}.get(table, table)
@@ -118,7 +119,8 @@ def scene_keys(scene):
     for table, records in (("supports", scene.supports), ("tractions", scene.tractions)):
         for i, record in enumerate(records):
             rows += record_keys(record, f"{table}.{i}")
-    for name in ("loading", "analysis", "solver", "output", "remesh", "tool", "geostatic"):
+    for name in ("loading", "analysis", "solver", "output", "remesh", "tool", "geostatic",
+                 "soil_contact"):
         if getattr(scene, name) is not None:
             rows += record_keys(getattr(scene, name), name)
     for key, result in scene.headline.items():
