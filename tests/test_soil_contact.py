@@ -184,12 +184,26 @@ def test_the_contact_jacobian_is_the_derivative_of_its_residual(blocks_scene):
         return b.getArray().copy()
 
     base = residual()
-    assert 0 < contact.touching() < len(contact._node)
+    assert 0 < contact.touching() < len(contact._force)
     rows, columns = contact.coupling_entries()
     jacobian = coo_matrix((contact.coupling_values(), (rows, columns)), shape=(n, n)).tocsr()
     direction = np.random.default_rng(0).standard_normal(n) * 1e-7
     w.x.array[:] += direction
     assert residual() - base == pytest.approx(jacobian @ direction, rel=1e-6, abs=1e-12)
+
+
+def test_faces_too_far_apart_to_pair_leave_the_run_as_without(tmp_path, blocks_scene):
+    """The blocks' far ends named: no pair on any step, and the blocks pass through each
+    other with no force, as without [soil_contact]."""
+    from soilbin.app.run import run_scene
+    blocks_scene.write_text(SCENE.replace('"a_face", "b_face"', '"a_end", "b_end"'))
+    summary = run_scene(load_scene(blocks_scene), tmp_path / "run")
+    assert summary["status"] == "complete"
+    with open(tmp_path / "run" / "curve.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 10
+    assert all(float(row["soil_contact_force"]) == 0.0 for row in rows)
+    assert all(abs(float(row["force"])) < 1e-9 for row in rows)
 
 
 def test_soil_contact_faces_must_be_boundaries_of_the_mesh(blocks_scene):

@@ -116,13 +116,13 @@ class SoilContact:
         return geometry[nodes]
 
     def pair(self):
-        """Pair the nodes this rank owns with the triangles they face, from the current
-        positions (collective)."""
+        """Pair the contact points this rank owns with the triangles they face, from the
+        current positions (collective)."""
         self.committed_force = self.force()
         ids, x_mesh, dofs, fixed, facets = self._gathered_surface()
-        mine = np.flatnonzero(np.isin(ids, self._node_ids[:self._owned_nodes]))
-        local = np.searchsorted(self._node_ids[:self._owned_nodes], ids[mine])
-        self._mine, self._mine_local = mine, local
+        owned = np.isin(ids, self._node_ids[:self._owned_nodes])
+        mine = np.flatnonzero(owned)
+        self._mine_local = np.searchsorted(self._node_ids[:self._owned_nodes], ids[mine])
         self._gathered_order = np.concatenate(self.comm.allgather(mine))
         self._x_mesh = x_mesh
         x = x_mesh + self._nodal_unknown()
@@ -132,49 +132,48 @@ class SoilContact:
         normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         area = np.linalg.norm(normal, axis=1) / 2.0
         normal /= 2.0 * area[:, None]
-        share = area.reshape(len(facets), -1).sum(axis=1) / n_corners
-        node_area = np.zeros(len(x))   # a facet's area shared by its corners (lumped, P1)
         node_normal = np.zeros((len(x), 3))
-        for k in range(n_corners):
-            np.add.at(node_area, facets[:, k], share)
         for k in range(3):
             np.add.at(node_normal, triangles[:, k], area[:, None] * normal)
-        node_normal /= np.maximum(np.linalg.norm(node_normal, axis=1), 1e-300)[:, None]
+        points, point_area = _contact_points(facets, area.reshape(len(facets), -1).sum(axis=1))
+        point_normal = node_normal[points].sum(axis=1)
+        point_normal /= np.maximum(np.linalg.norm(point_normal, axis=1), 1e-300)[:, None]
         longest = np.max([np.linalg.norm(corners[:, k] - corners[:, k - 1], axis=1)
                           for k in range(3)], axis=0)
 
+        mine = np.flatnonzero(owned[points.min(axis=1)])      # a point is its lesser node's
         count = min(CANDIDATES, len(triangles))
-        candidates = (cKDTree(corners.mean(axis=1)).query(x[mine], k=count)[1].reshape(
+        p = x[points[mine]].mean(axis=1)
+        candidates = (cKDTree(corners.mean(axis=1)).query(p, k=count)[1].reshape(
             len(mine), count) if len(mine) and count else np.zeros((len(mine), 0), dtype=int))
         a, b, c = (corners[candidates, k] for k in range(3))
         n_c = normal[candidates]
-        p = x[mine][:, None, :]
-        s = np.einsum("pkj,pkj->pk", p - a, n_c)                     # signed distance
-        weights = _barycentric(p - s[..., None] * n_c, a, b, c)
+        s = np.einsum("pkj,pkj->pk", p[:, None, :] - a, n_c)         # signed distance
+        weights = _barycentric(p[:, None, :] - s[..., None] * n_c, a, b, c)
         h = longest[candidates]
-        valid = ((triangles[candidates] != mine[:, None, None]).all(axis=2)
-                 & (np.einsum("pj,pkj->pk", node_normal[mine], n_c) < FACING)
+        apart = ~(triangles[candidates][:, :, :, None] == points[mine][:, None, None, :]).any(
+            axis=(2, 3))
+        valid = (apart & (np.einsum("pj,pkj->pk", point_normal[mine], n_c) < FACING)
                  & (weights >= -EDGE_TOLERANCE).all(axis=2)
                  & (s > -BAND_INSIDE * h) & (s < BAND_OUTSIDE * h))
-        node, which = np.nonzero(valid)
-        chosen = candidates[node, which]
-        lam = np.clip(weights[node, which], 0.0, None)
+        point, which = np.nonzero(valid)
+        chosen = candidates[point, which]
+        lam = np.clip(weights[point, which], 0.0, None)
         lam /= lam.sum(axis=1, keepdims=True)
-        self._node = mine[node]
-        self._corners = triangles[chosen]
         self._lambda, self._normal = lam, normal[chosen]
-        # a node's area shared by its pairs: on a flat face the pairs of a node over a corner
-        # press as one; in a valley each of its sides takes a share
-        self._area = node_area[self._node] / np.bincount(node, minlength=len(mine))[node]
-        self._c = np.column_stack([np.ones(len(lam)), -lam])                    # (pairs, 4)
-        self._pair_nodes = np.column_stack([self._node, self._corners])         # (pairs, 4)
-        pair_dofs = dofs[self._pair_nodes].reshape(-1, 12)
-        pair_fixed = fixed[self._pair_nodes].reshape(-1, 12)
-        self._entry_rows = np.broadcast_to(pair_dofs[:, :, None], (len(lam), 12, 12))
-        self._entry_columns = np.broadcast_to(pair_dofs[:, None, :], (len(lam), 12, 12))
+        # a point's area shared by its pairs: on a flat face the pairs of a point over a
+        # corner press as one; in a valley each of its sides takes a share
+        self._area = point_area[mine[point]] / np.bincount(point, minlength=len(mine))[point]
+        self._c = np.column_stack([np.full((len(lam), 2), 0.5), -lam])         # (pairs, 5)
+        self._pair_nodes = np.column_stack([points[mine[point]], triangles[chosen]])
+        size = 3 * self._pair_nodes.shape[1]
+        pair_dofs = dofs[self._pair_nodes].reshape(len(lam), size)
+        pair_fixed = fixed[self._pair_nodes].reshape(len(lam), size)
+        self._entry_rows = np.broadcast_to(pair_dofs[:, :, None], (len(lam), size, size))
+        self._entry_columns = np.broadcast_to(pair_dofs[:, None, :], (len(lam), size, size))
         self._entries = ~pair_fixed[:, :, None] & ~pair_fixed[:, None, :]
         self._pair_dofs = pair_dofs
-        signature = np.column_stack([ids[self._node], ids[self._corners]])
+        signature = ids[self._pair_nodes]
         changed = self._pairs is None or not np.array_equal(signature, self._pairs)
         if self.comm.allreduce(changed, op=MPI.LOR):
             self.version += 1
@@ -192,20 +191,22 @@ class SoilContact:
     def update(self):
         """The penalty forces at the current iterate (call once per iterate; collective)."""
         x = self._x_mesh + self._nodal_unknown()
-        on_triangle = np.einsum("pk,pkj->pj", self._lambda, x[self._corners])
-        gap = np.einsum("pj,pj->p", x[self._node] - on_triangle, self._normal) - self._standoff
+        # c = (1/2, 1/2, -λ): the point (a node twice, or an edge's middle) less the triangle's
+        apart = np.einsum("pk,pkj->pj", self._c, x[self._pair_nodes])
+        gap = np.einsum("pj,pj->p", apart, self._normal) - self._standoff
         self._force = self._k * self._area * np.maximum(-gap, 0.0)
 
     def add_residual(self, b):
-        """Residual += -f c_i n at the pair's node (i = 0) and corners (collective)."""
+        """Residual += -f c_i n at the pair's point's nodes and triangle's corners
+        (collective)."""
         values = -self._force[:, None, None] * self._c[:, :, None] * self._normal[:, None, :]
         b.setValues(self._pair_dofs.ravel(), values.ravel(), addv=PETSc.InsertMode.ADD_VALUES)
         b.assemblyBegin()
         b.assemblyEnd()
 
     def coupling_entries(self):
-        """The Jacobian's entries of the pairs (global rows, columns): the node's and its
-        triangle's corners' dofs, supported ones left out."""
+        """The Jacobian's entries of the pairs (global rows, columns): the point's nodes' and
+        its triangle's corners' dofs, supported ones left out."""
         return self._entry_rows[self._entries], self._entry_columns[self._entries]
 
     def coupling_values(self):
@@ -214,7 +215,7 @@ class SoilContact:
         cc = self._c[:, :, None] * self._c[:, None, :]
         nn = self._normal[:, :, None] * self._normal[:, None, :]
         blocks = (stiffness[:, None, None, None, None] * cc[:, :, None, :, None]
-                  * nn[:, None, :, None, :]).reshape(-1, 12, 12)
+                  * nn[:, None, :, None, :]).reshape(len(self._c), *self._entries.shape[1:])
         return blocks[self._entries]
 
     def force(self):
@@ -236,3 +237,25 @@ def _barycentric(q, a, b, c):
     second = (d11 * d20 - d01 * d21) / denominator
     third = (d00 * d21 - d01 * d20) / denominator
     return np.stack([1.0 - second - third, second, third], axis=-1)
+
+
+def _contact_points(facets, facet_area):
+    """The contact points of the faces: each node (twice: (n, n)) and each facet edge's
+    middle ((a, b)), (k, 2) node pairs, and their areas (k,). A facet's area goes half to its
+    corners and half to its edges' middles, which hand it on half and half to their ends: a
+    node's share with its edges' is a third of a triangle's, a quarter of a quadrilateral's,
+    the nodal forces of a uniform pressure."""
+    n_corners = facets.shape[1]
+    around = [0, 1, 2] if n_corners == 3 else [0, 1, 3, 2]
+    share = facet_area / (2 * n_corners)
+    nodes = np.unique(facets)
+    node_area = np.zeros(facets.max() + 1 if len(facets) else 0)
+    for k in range(n_corners):
+        np.add.at(node_area, facets[:, k], share)
+    edges = np.sort(np.stack([facets[:, around], facets[:, np.roll(around, -1)]], axis=2),
+                    axis=2).reshape(-1, 2)
+    edges, index = np.unique(edges, axis=0, return_inverse=True)
+    edge_area = np.bincount(index.ravel(), weights=np.repeat(share, n_corners),
+                            minlength=len(edges))
+    points = np.concatenate([np.column_stack([nodes, nodes]), edges])
+    return points, np.concatenate([node_area[nodes], edge_area])
