@@ -1,34 +1,37 @@
-"""The soil against itself: a node of its boundary pressing a facing triangle of it.
+"""The soil against itself: a point of its boundary pressing a facing triangle of it.
 
 Where the soil's boundary folds over (the heap beside a tool rolling onto the furrow
 behind it) one part of it meets another; without a contact the soil passes through itself
-and the fold check (``remesh.surface``) stops the run. At every commit each mesh node of the
-faces ``[soil_contact] faces`` is paired with every triangle of those faces (a
-quadrilateral facet cut in two) near it that
+and the fold check (``remesh.surface``) stops the run. The contact points of the faces
+``[soil_contact] faces`` are their mesh nodes and the middles of their facets' edges (an
+edge of soil crossing another, its ends outside, is held by its middle). At every commit
+each point is paired with every triangle of those faces (a quadrilateral facet cut in two)
+near it that
 
-- has not the node as a corner,
-- faces it: its outward normal n and the node's (its triangles', area-weighted) more than
-  120 degrees apart (:data:`FACING`),
-- holds the node's projection (barycentric λ >= -:data:`EDGE_TOLERANCE`) within
+- has none of the point's nodes as a corner,
+- faces it: its outward normal n and the point's (its nodes', area-weighted from their
+  triangles) more than 120 degrees apart (:data:`FACING`),
+- holds the point's projection (barycentric λ >= -:data:`EDGE_TOLERANCE`) within
   -:data:`BAND_INSIDE` h .. :data:`BAND_OUTSIDE` h of its plane, h its longest edge,
 
 and the pair's λ and n are kept over the step: node-to-surface contact (Wriggers 2006,
 Computational Contact Mechanics, sections 4.1 and 9.1) with the projection frozen for a step.
-With x a node's position (the mesh's node plus the unknown there) and the standoff δ, the gap
+With x the nodes' positions (the mesh's node plus the unknown there), the point
+x_p = (x_a + x_b)/2 (a node is a = b) and the standoff δ, the gap
 
-    g = (x_p - Σ λ_i x_i) . n - δ
+    g = (x_p - Σ λ_i x_i) . n - δ = (Σ_k c_k x_k) . n - δ,   c = (1/2, 1/2, -λ_1, -λ_2, -λ_3),
 
-gives the penalty force f = k_n A_p max(-g, 0) on the node along n and -λ_i f on the
-triangle's corners (action and reaction), A_p the node's share of its facets' area (a
-third of a triangle's, a quarter of a quadrilateral's: uniform pressure's nodal forces)
-divided among the node's pairs:
-residual (internal - external) += -f n at the node and +λ_i f n at the corners, Jacobian
-+= k_n A_p (c c^T) ⊗ (n n^T) with c = (1, -λ_1, -λ_2, -λ_3) where g < 0 (symmetric). It
-couples the node to the corners of other cells, anywhere in the mesh and on any rank: the
-Newton matrix is made anew with those entries whenever the pairs change (``version``).
-Both faces' nodes are paired (two passes), so two faces in contact are held by 2 k_n per
-area. Frictionless and stateless: a checkpoint, a resume or a remesh pairs anew. Only the
-mesh's vertices take part (the mesh moves with them; the mid-edge nodes of quadratic
+gives the penalty force f = k_n A max(-g, 0) on the point along n and -λ_i f on the
+triangle's corners (action and reaction). A is the point's area (a facet's goes half to its
+corners, half to its edges' middles, which hand theirs on to their ends half and half: a
+node gets a third of a triangle's, a quarter of a quadrilateral's, the nodal forces of a
+uniform pressure) divided among the point's pairs. Residual (internal - external) += -f c_k
+n at the pair's five nodes; Jacobian += k_n A (c c^T) ⊗ (n n^T) where g < 0 (symmetric).
+It couples nodes of different cells, anywhere in the mesh and on any rank: the Newton
+matrix is made anew with those entries whenever the pairs change (``version``). Both
+faces' points are paired (two passes), so two faces in contact are held by 2 k_n per area.
+Frictionless and stateless: a checkpoint, a resume or a remesh pairs anew. Only the mesh's
+vertices move the points (the mesh moves with them; the mid-edge nodes of quadratic
 elements carry none of the force), and a supported dof takes none.
 """
 import numpy as np
