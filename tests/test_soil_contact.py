@@ -112,16 +112,22 @@ def closed_form_force(d):
     return max(d - (GAP - STANDOFF), 0.0) / (1.0 / (2.0 * K_N) + 2.0 * LENGTH / E)
 
 
-def test_blocks_pressed_together_carry_the_closed_form_force(tmp_path, blocks_scene):
-    from soilbin.app.run import run_scene
-    summary = run_scene(load_scene(blocks_scene), tmp_path / "run")
-    assert summary["status"] == "complete"
-    with open(tmp_path / "run" / "curve.csv") as f:
+def closed_form_curve(folder):
+    """The run's curve.csv rows, each checked against :func:`closed_form_force`."""
+    with open(folder / "curve.csv") as f:
         rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
     assert len(rows) == 10
     for row in rows:
         expected = closed_form_force(row["displacement"])
         assert row["force"] == pytest.approx(expected, rel=1e-9, abs=1e-9 * closed_form_force(0.1))
+    return rows
+
+
+def test_blocks_pressed_together_carry_the_closed_form_force(tmp_path, blocks_scene):
+    from soilbin.app.run import run_scene
+    summary = run_scene(load_scene(blocks_scene), tmp_path / "run")
+    assert summary["status"] == "complete"
+    rows = closed_form_curve(tmp_path / "run")
     assert [row["force"] > 1.0 for row in rows] == [False] * 4 + [True] * 6   # d > 0.04
     for row in rows:   # the pairs' forces, both passes, carry all the load
         assert row["soil_contact_force"] == pytest.approx(row["force"], rel=1e-9, abs=1e-9)
@@ -147,17 +153,12 @@ def test_a_run_stopped_without_soil_contact_resumes_with_it(tmp_path, blocks_sce
 
 @pytest.mark.slow
 def test_blocks_pressed_together_under_two_ranks(tmp_path, blocks_scene):
-    """The blocks' faces on two ranks: a pair's node and triangle on different ranks (the
+    """The blocks' faces on two ranks: a pair's point and triangle on different ranks (the
     residual and Jacobian entries of another rank's rows), the same force."""
     done = soilbin_cli("run", blocks_scene, "--json", "--out", tmp_path / "n2", mpi_ranks=2)
     assert done.returncode == 0, done.stderr
     assert last_json(done.stdout)["n_ranks"] == 2
-    with open(tmp_path / "n2" / "curve.csv") as f:
-        rows = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
-    assert len(rows) == 10
-    for row in rows:
-        expected = closed_form_force(row["displacement"])
-        assert row["force"] == pytest.approx(expected, rel=1e-9, abs=1e-9 * closed_form_force(0.1))
+    closed_form_curve(tmp_path / "n2")
 
 
 def test_the_contact_jacobian_is_the_derivative_of_its_residual(blocks_scene):

@@ -19,7 +19,8 @@ Computational Contact Mechanics, sections 4.1 and 9.1) with the projection froze
 With x the nodes' positions (the mesh's node plus the unknown there), the point
 x_p = (x_a + x_b)/2 (a node is a = b) and the standoff δ, the gap
 
-    g = (x_p - Σ λ_i x_i) . n - δ = (Σ_k c_k x_k) . n - δ,   c = (1/2, 1/2, -λ_1, -λ_2, -λ_3),
+    g = (x_p - Σ λ_i x_i) . n - δ = (Σ_k c_k x_k) . n - δ,
+    c = (1/2, 1/2, -λ_1, -λ_2, -λ_3),
 
 gives the penalty force f = k_n A max(-g, 0) on the point along n and -λ_i f on the
 triangle's corners (action and reaction). A is the point's area (a facet's goes half to its
