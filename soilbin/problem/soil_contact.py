@@ -14,8 +14,8 @@ near it that
 - holds the point's projection (barycentric λ >= -:data:`EDGE_TOLERANCE`) within
   -:data:`BAND_INSIDE` h .. :data:`BAND_OUTSIDE` h of its plane, h its longest edge,
 
-and the pair's λ and n are kept over the step: node-to-surface contact (Wriggers 2006,
-Computational Contact Mechanics, sections 4.1 and 9.1) with the projection frozen for a step.
+and the pair's λ and n are kept over the step: node-to-segment penalty contact (Wriggers
+2006, Computational Contact Mechanics) with the projection frozen for a step.
 With x the nodes' positions (the mesh's node plus the unknown there), the point
 x_p = (x_a + x_b)/2 (a node is a = b) and the standoff δ, the gap
 
@@ -43,17 +43,17 @@ from scipy.spatial import cKDTree
 
 from ..meshes.tagged import outward_corners
 
-#: The cosine of the least angle between a node's normal and a triangle's that it can press.
+#: The cosine of the least angle between a point's normal and a triangle's that it presses.
 FACING = -0.5
-#: How far (of its longest edge) past a triangle's edges a node's projection still pairs.
+#: How far (of its longest edge) past a triangle's edges a point's projection still pairs.
 EDGE_TOLERANCE = 0.05
-#: The band about a triangle's plane (of its longest edge) in which a node pairs with it:
-#: inside the soil and outside. Inside it is thin: a node comes to a face from outside
-#: and the penalty holds it there, while a node beyond the band's inside is one of the
+#: The band about a triangle's plane (of its longest edge) in which a point pairs with it:
+#: inside the soil and outside. Inside it is thin: a point comes to a face from outside
+#: and the penalty holds it there, while a point beyond the band's inside is one of the
 #: far side of a thin sheet of soil (0.25 paired the top of a 1-in roof of soil over the
 #: tine's furrow with its underside, and Newton diverged).
 BAND_INSIDE, BAND_OUTSIDE = 0.05, 0.5
-#: The triangles whose centroids are nearest a node that it is tried against.
+#: The triangles whose centroids are nearest a point that it is tried against.
 CANDIDATES = 16
 
 
@@ -227,7 +227,7 @@ class SoilContact:
         return self.comm.allreduce(float(self._force.sum()), op=MPI.SUM)
 
     def touching(self):
-        """The number of nodes pressing a triangle (summed over ranks)."""
+        """The number of pairs whose point presses its triangle (summed over ranks)."""
         return self.comm.allreduce(int((self._force > 0.0).sum()), op=MPI.SUM)
 
 
