@@ -64,25 +64,52 @@ class SoilContact:
         mesh = disc.mesh
         self.comm = mesh.comm
         self._k, self._standoff = settings.k_n, settings.standoff
-        self._tagged, self._w = tagged, w
-        self._tags = [tagged.boundaries[face] for face in settings.faces]
+        self._w = w
         nodal = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
         nodes_map = nodal.dofmap.index_map
         n_cells = mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts
-        self._node_of_geometry = np.empty(len(mesh.geometry.x), dtype=np.int32)
-        self._node_of_geometry[mesh.geometry.dofmap.array] = nodal.dofmap.list.array.reshape(
+        node_of_geometry = np.empty(len(mesh.geometry.x), dtype=np.int32)
+        node_of_geometry[mesh.geometry.dofmap.array] = nodal.dofmap.list.array.reshape(
             n_cells, -1).ravel()
-        self._owned_nodes = nodes_map.size_local
-        self._node_ids = nodes_map.local_to_global(
+        self._geometry_of_node = np.empty_like(node_of_geometry)
+        self._geometry_of_node[node_of_geometry] = np.arange(len(node_of_geometry))
+        node_ids = nodes_map.local_to_global(
             np.arange(nodes_map.size_local + nodes_map.num_ghosts, dtype=np.int32))
         self._dofs = disc.vertex_dofs(nodal)                       # local, (nodes, 3)
         space_map, bs = disc.space.dofmap.index_map, disc.space.dofmap.index_map_bs
-        self._global_dofs = space_map.local_to_global(
+        global_dofs = space_map.local_to_global(
             (self._dofs // bs).ravel()).reshape(self._dofs.shape) * bs + self._dofs % bs
         fixed = np.zeros(len(w.x.array), dtype=bool)
         for bc in bcs:
             fixed[bc.dof_indices()[0]] = True
-        self._fixed = fixed[self._dofs]
+        tags = tagged.facet_tags
+        keep = ((tags.indices < mesh.topology.index_map(2).size_local)
+                & np.isin(tags.values, [tagged.boundaries[face] for face in settings.faces]))
+        facets = node_of_geometry[outward_corners(mesh, tags.indices[keep])]
+        # the faces gathered on every rank, their nodes in the order of their first positions
+        # (any partition pairs alike): global ids, dofs and supported flags, and the facets
+        nodes = np.unique(facets)
+        rows = np.concatenate(self.comm.allgather(np.column_stack([
+            node_ids[nodes], mesh.geometry.x[self._geometry_of_node[nodes]],
+            global_dofs[nodes], fixed[self._dofs[nodes]]])))
+        ids, first = np.unique(rows[:, 0].astype(np.int64), return_index=True)
+        order = np.lexsort(rows[first, 3:0:-1].T)
+        rows, ids = rows[first][order], ids[order]
+        by_id = np.argsort(ids)
+        corner_ids = np.concatenate(self.comm.allgather(node_ids[facets]))
+        facets = by_id[np.searchsorted(ids[by_id], corner_ids)]
+        self._facets = facets[np.lexsort(np.sort(facets, axis=1).T[::-1])]
+        self._ids = ids
+        self._global_dofs = rows[:, 4:7].astype(PETSc.IntType)
+        self._fixed = rows[:, 7:10] > 0.5
+        self._points = _contact_points(self._facets)
+        # the faces' nodes this rank owns (local numbers), and every rank's in gathered order
+        owned_ids = node_ids[:nodes_map.size_local]
+        self._owned = np.isin(ids, owned_ids)
+        mine = np.flatnonzero(self._owned)
+        self._mine_local = np.searchsorted(owned_ids, ids[mine])
+        self._gathered_order = np.concatenate(self.comm.allgather(mine))
+        self._mesh_x = mesh.geometry.x
         self.version = 0
         self._pairs, self._force = None, np.zeros(0)
         #: The total force of the soil pressing on itself at the last commit.
@@ -90,46 +117,13 @@ class SoilContact:
         self.pair()
 
     # -- pairing, at every commit -----------------------------------------------------------
-    def _gathered_surface(self):
-        """Every rank's part of the faces, gathered on all: the nodes (sorted by position, so
-        that any partition pairs alike) with their global id, position on the mesh, global
-        dofs and supported flags; the facets (m, 3 or 4 corners) into them."""
-        tags = self._tagged.facet_tags
-        owned = self._tagged.mesh.topology.index_map(2).size_local
-        keep = (tags.indices < owned) & np.isin(tags.values, self._tags)
-        facets = self._node_of_geometry[outward_corners(self._tagged.mesh, tags.indices[keep])]
-        nodes = np.unique(facets)
-        x = self._tagged.mesh.geometry.x[self._geometry_of(nodes)]
-        rows = np.column_stack([self._node_ids[nodes], x, self._global_dofs[nodes],
-                                self._fixed[nodes]])
-        rows = np.concatenate(self.comm.allgather(rows))
-        ids, first = np.unique(rows[:, 0].astype(np.int64), return_index=True)
-        rows = rows[first]
-        order = np.lexsort(rows[:, 3:0:-1].T)
-        rows, ids = rows[order], ids[order]
-        by_id = np.argsort(ids)
-        corner_ids = np.concatenate(self.comm.allgather(self._node_ids[facets]))
-        facets = by_id[np.searchsorted(ids[by_id], corner_ids)]
-        facets = facets[np.lexsort(np.sort(facets, axis=1).T[::-1])]
-        return (ids, rows[:, 1:4], rows[:, 4:7].astype(PETSc.IntType), rows[:, 7:10] > 0.5,
-                facets)
-
-    def _geometry_of(self, nodes):
-        geometry = np.empty(len(self._node_ids), dtype=np.int32)
-        geometry[self._node_of_geometry] = np.arange(len(self._node_of_geometry))
-        return geometry[nodes]
-
     def pair(self):
         """Pair the contact points this rank owns with the triangles they face, from the
         current positions (collective)."""
         self.committed_force = self.force()
-        ids, x_mesh, dofs, fixed, facets = self._gathered_surface()
-        owned = np.isin(ids, self._node_ids[:self._owned_nodes])
-        mine = np.flatnonzero(owned)
-        self._mine_local = np.searchsorted(self._node_ids[:self._owned_nodes], ids[mine])
-        self._gathered_order = np.concatenate(self.comm.allgather(mine))
-        self._x_mesh = x_mesh
-        x = x_mesh + self._nodal_unknown()
+        facets, points, dofs, fixed = self._facets, self._points, self._global_dofs, self._fixed
+        self._x_mesh = self._gathered(self._mesh_x[self._geometry_of_node[self._mine_local]])
+        x = self._x_mesh + self._nodal_unknown()
         n_corners = facets.shape[1]
         triangles = facets if n_corners == 3 else facets[:, [[0, 1, 3], [0, 3, 2]]].reshape(-1, 3)
         corners = x[triangles]
@@ -139,13 +133,13 @@ class SoilContact:
         node_normal = np.zeros((len(x), 3))
         for k in range(3):
             np.add.at(node_normal, triangles[:, k], area[:, None] * normal)
-        points, point_area = _contact_points(facets, area.reshape(len(facets), -1).sum(axis=1))
+        point_area = _point_areas(facets, points, area.reshape(len(facets), -1).sum(axis=1))
         point_normal = node_normal[points].sum(axis=1)
         point_normal /= np.maximum(np.linalg.norm(point_normal, axis=1), 1e-300)[:, None]
         longest = np.max([np.linalg.norm(corners[:, k] - corners[:, k - 1], axis=1)
                           for k in range(3)], axis=0)
 
-        mine = np.flatnonzero(owned[points.min(axis=1)])      # a point is its lesser node's
+        mine = np.flatnonzero(self._owned[points.min(axis=1)])   # a point is its lesser node's
         count = min(CANDIDATES, len(triangles))
         p = x[points[mine]].mean(axis=1)
         candidates = (cKDTree(corners.mean(axis=1)).query(p, k=count)[1].reshape(
@@ -177,19 +171,23 @@ class SoilContact:
         self._entry_columns = np.broadcast_to(pair_dofs[:, None, :], (len(lam), size, size))
         self._entries = ~pair_fixed[:, :, None] & ~pair_fixed[:, None, :]
         self._pair_dofs = pair_dofs
-        signature = ids[self._pair_nodes]
+        signature = self._ids[self._pair_nodes]
         changed = self._pairs is None or not np.array_equal(signature, self._pairs)
         if self.comm.allreduce(changed, op=MPI.LOR):
             self.version += 1
         self._pairs = signature
         self._force = np.zeros(len(lam))
 
+    def _gathered(self, values):
+        """The values (n_mine, 3) at the faces' nodes this rank owns, gathered from every rank
+        into the faces' node order (n, 3)."""
+        gathered = np.empty((len(self._ids), 3))
+        gathered[self._gathered_order] = np.concatenate(self.comm.allgather(values)).reshape(-1, 3)
+        return gathered
+
     def _nodal_unknown(self):
-        """The unknown at every node of the faces (n, 3), gathered from the ranks owning them."""
-        mine = self._w.x.array[self._dofs[self._mine_local]]
-        u = np.empty((len(self._x_mesh), 3))
-        u[self._gathered_order] = np.concatenate(self.comm.allgather(mine)).reshape(-1, 3)
-        return u
+        """The unknown at every node of the faces (n, 3)."""
+        return self._gathered(self._w.x.array[self._dofs[self._mine_local]])
 
     # -- the Newton solver's coupled term ---------------------------------------------------
     def update(self):
@@ -243,23 +241,31 @@ def _barycentric(q, a, b, c):
     return np.stack([1.0 - second - third, second, third], axis=-1)
 
 
-def _contact_points(facets, facet_area):
-    """The contact points of the faces: each node (twice: (n, n)) and each facet edge's
-    middle ((a, b)), (k, 2) node pairs, and their areas (k,). A facet's area goes half to its
-    corners and half to its edges' middles, which hand it on half and half to their ends: a
-    node's share with its edges' is a third of a triangle's, a quarter of a quadrilateral's,
-    the nodal forces of a uniform pressure."""
-    n_corners = facets.shape[1]
-    around = [0, 1, 2] if n_corners == 3 else [0, 1, 3, 2]
-    share = facet_area / (2 * n_corners)
+def _contact_points(facets):
+    """The contact points of the facets (m, 3 or 4 corners): each node (twice: (n, n)) and
+    each facet edge's middle ((a, b), a < b), (k, 2) node pairs in lexicographic order."""
     nodes = np.unique(facets)
-    node_area = np.zeros(facets.max() + 1 if len(facets) else 0)
-    for k in range(n_corners):
-        np.add.at(node_area, facets[:, k], share)
-    edges = np.sort(np.stack([facets[:, around], facets[:, np.roll(around, -1)]], axis=2),
-                    axis=2).reshape(-1, 2)
-    edges, index = np.unique(edges, axis=0, return_inverse=True)
-    edge_area = np.bincount(index.ravel(), weights=np.repeat(share, n_corners),
-                            minlength=len(edges))
-    points = np.concatenate([np.column_stack([nodes, nodes]), edges])
-    return points, np.concatenate([node_area[nodes], edge_area])
+    return np.unique(np.concatenate([np.column_stack([nodes, nodes]), _edges(facets)]), axis=0)
+
+
+def _edges(facets):
+    """The edges of each facet in turn, (m * corners, 2) node pairs, each pair sorted."""
+    around = [0, 1, 2] if facets.shape[1] == 3 else [0, 1, 3, 2]
+    return np.sort(np.stack([facets[:, around], facets[:, np.roll(around, -1)]], axis=2),
+                   axis=2).reshape(-1, 2)
+
+
+def _point_areas(facets, points, facet_area):
+    """The area of each contact point (k,): a facet's goes half to its corners and half to its
+    edges' middles, which hand it on half and half to their ends: a node's share with its
+    edges' is a third of a triangle's, a quarter of a quadrilateral's, the nodal forces of a
+    uniform pressure."""
+    n_corners = facets.shape[1]
+    share = np.repeat(facet_area / (2 * n_corners), n_corners)   # per facet corner and edge
+    n = points.max() + 1 if len(points) else 0
+    key = points[:, 0] * n + points[:, 1]        # sorted, as the points are
+    nodes = facets.reshape(-1, 1)
+    area = np.zeros(len(points))
+    for pair in (np.hstack([nodes, nodes]), _edges(facets)):
+        np.add.at(area, np.searchsorted(key, pair[:, 0] * n + pair[:, 1]), share)
+    return area
