@@ -1,6 +1,8 @@
 """The 2-in tool's long travel against the mesh: studies/tine-long-travel.toml (the cap soil)
 or, with --study tine-long-clay-paths, studies/tine-long-clay-paths.toml (the undrained clay
-along three paths of remeshes on each of its meshes); their tables in docs/chapter8.md.
+along three paths of remeshes on each of its meshes), with --study tine-long-cap-W,
+studies/tine-long-cap-W.toml (the cap soil toward 12 in against its largest compaction W);
+their tables in docs/chapter8.md.
 
 Runs `soilbin study studies/STUDY.toml` (resumable), then reads each case's summary.json,
 curve.csv and remeshes.csv and writes between the STUDY markers of docs/chapter8.md (--page)
@@ -28,9 +30,11 @@ from soilbin.remesh.remesher import FRESH, LOCAL, MOVED
 from doc_tables import ROOT, write_between_markers
 from study_tables import arguments, at, finished, remeshes, run_study
 
-STUDIES = ("tine-long-travel", "tine-long-clay-paths")
+STUDIES = ("tine-long-travel", "tine-long-clay-paths", "tine-long-cap-W")
 SIZE = "mesh.element_size"
 ELEMENT = "analysis.element"
+#: The value that sets a case's path of remeshes and nothing else.
+PATH = "remesh.min_quality"
 
 
 def mesh_of(case, scene):
@@ -98,13 +102,15 @@ def costs(results, scene):
 
 
 def over_paths(results, scene):
-    """Per mesh run along several paths of remeshes (cases that differ in nothing else): the
-    draft at 2 and 4 in and over the last half and the last sixth of the travel, each as the
-    mean over the paths that got there and their range; '' where no mesh has two paths."""
+    """Per mesh run along several paths of remeshes (cases that differ in :data:`PATH` alone):
+    the draft at 2 and 4 in and over the last half and the last sixth of the travel, each as
+    the mean over the paths that got there and their range; '' where no mesh has two paths."""
     groups = {}
     for case, summary, rows, _ in results:
         mesh = (case.values.get(ELEMENT, scene.analysis.element.value),
-                case.values.get(SIZE, scene.mesh.element_size))
+                case.values.get(SIZE, scene.mesh.element_size),
+                tuple(sorted((key, value) for key, value in case.values.items()
+                             if key not in (ELEMENT, SIZE, PATH))))
         groups.setdefault(mesh, []).append((summary, rows))
     if all(len(paths) < 2 for paths in groups.values()):
         return ""
@@ -112,7 +118,7 @@ def over_paths(results, scene):
     lines = ["| element | element size [in] | paths (to the end) | draft at 2 in [lb] | "
              "draft at 4 in [lb] | draft over the last half [lb] | "
              "draft over the last sixth [lb] |", "| --- | --- | --- | --- | --- | --- | --- |"]
-    for (element, size), paths in groups.items():
+    for (element, size, _), paths in groups.items():
         ended = [(summary, rows) for summary, rows in paths if _ended(rows, travel)]
         halves = [_last_half(rows) for _, rows in ended]
         sixths = [summary["steady_draft"] for summary, _ in ended]

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from soilbin.app.collapse import collapse_limit, collapse_pressure
+from soilbin.app.collapse import collapse_limit, collapse_pressure, stepping
 from soilbin.app.plateau import steady_force, steady_slope, steady_spread
 from soilbin.records.scene import load_scene
 from soilbin.solver.stepping import StepRecord, run_load_steps
@@ -375,3 +375,21 @@ def test_rigid_rough_footing_reaches_its_full_settlement(solve):
     assert limit < pressures[-1] < 1.1 * limit
     peak = pressures.index(max(pressures))
     assert min(pressures[peak:]) > 0.98 * max(pressures)
+
+
+def test_the_heave_is_the_rise_of_the_soils_highest_point_ahead_of_the_tool():
+    """curve.csv's ``heave``: the soil's highest point above its highest at the start (the
+    flat ground), as the mesh's own moved coordinates give it, at the crest of the soil the
+    blade pushes up in front of it (the clay's blade, 0.3 in in large deformation)."""
+    problem = make_problem("tine-2in-long-clay", "mesh.element_size=1.5",
+                           "loading.magnitude=0.3", "loading.steps=3", "output.at=[]")
+    ground = problem.mesh.geometry.x[:, 2].max()
+    records = []
+    assert run_load_steps(problem, on_step=records.append, **stepping(problem.scene)).complete
+    heaves = [r.columns["heave"] for r in records]
+    x = problem.mesh.geometry.x
+    assert heaves[-1] == pytest.approx(x[:, 2].max() - ground, rel=1e-12)
+    assert 0.0 < heaves[0] < heaves[1] < heaves[2]
+    crest = x[np.argmax(x[:, 2])]
+    front = max(x[:, 0].max(initial=-np.inf) for x in problem.tool.face_points.values())
+    assert crest[0] > front + problem.tool.travel

@@ -20,12 +20,13 @@ from .interrupt import deferred
 from .xdmf import XdmfSeries
 
 #: Every column a curve.csv may have; a run writes the step, what its problem observes
-#: (a loaded boundary: pressure; a tool: lift and the soil's volume change ahead of it;
-#: the force of the soil pressing on itself) and Newton's effort.
+#: (a loaded boundary: pressure; a tool: lift, the soil's volume change ahead of it and its
+#: heave; the force of the soil pressing on itself) and Newton's effort.
 CURVE_COLUMNS = ("step", "load_factor", "displacement", "force", "pressure", "lift",
-                 "front_volumetric_strain", "mesh_quality", "soil_contact_force",
+                 "front_volumetric_strain", "heave", "mesh_quality", "soil_contact_force",
                  "newton_iterations", "cuts", "wall_s")
-OBSERVED = ("pressure", "lift", "front_volumetric_strain", "mesh_quality", "soil_contact_force")
+OBSERVED = ("pressure", "lift", "front_volumetric_strain", "heave", "mesh_quality",
+            "soil_contact_force")
 #: The file of the remeshes' reports (a remeshing run).
 REMESHES = "remeshes.csv"
 #: The XDMF topology of each cell the soil's meshes and the tool's faces are made of.

@@ -37,7 +37,7 @@ from .rigid_tool_contact import RigidToolContact
 
 class RigidTool:
     #: Per-step values beside travel and draft (see :meth:`observe`).
-    columns = ("lift", "front_volumetric_strain")
+    columns = ("lift", "front_volumetric_strain", "heave")
 
     def __init__(self, scene, tagged, disc, kinematics, direction, w, supports):
         tool, loading = scene.tool, scene.loading
@@ -72,6 +72,7 @@ class RigidTool:
         self.face_points = dict(zip(tool.faces, np.split(self.interface.reference_points, ends)))
         self._front_strain = CellValue(mesh, kinematics.volume_change(),
                                        cell_ahead(mesh, self._front_centre(), direction))
+        self._kinematics, self._disc = kinematics, disc
 
     def _front_centre(self):
         """Centre of the face that leads the travel (its nodes furthest along it)."""
@@ -153,11 +154,26 @@ class RigidTool:
         return float(self.force() @ self.direction)
 
     def observe(self):
-        """Travel and draft, the lift (the soil's upward force on the tool) and the volumetric
-        strain of the soil element in front of the tool."""
+        """Travel and draft, the lift (the soil's upward force on the tool), the volumetric
+        strain of the soil element in front of the tool and the heave."""
         force = self.force()
         return Observation(self.travel, float(force @ self.direction),
-                           {"lift": -force[2], "front_volumetric_strain": self._front_strain()})
+                           {"lift": -force[2], "front_volumetric_strain": self._front_strain(),
+                            "heave": self._heave()})
+
+    def _heave(self):
+        """How far the soil's highest point has risen above the soil's highest point at the
+        start: the crest of the soil the tool pushes up (the nodes' starting heights are
+        their heights less their total displacement, carried across remeshes); collective."""
+        disc, total = self._disc, self._kinematics.displacement_p1()
+        dim = disc.dimension
+        rise = disc.to_world(total.x.array.reshape(-1, dim))[:, 2]
+        height = disc.to_world(total.function_space.tabulate_dof_coordinates()[:, :dim])[:, 2]
+        if not self._kinematics.moves_mesh:
+            height = height + rise
+        top, start = (self._comm.allreduce(float(z.max(initial=-np.inf)), op=MPI.MAX)
+                      for z in (height, height - rise))
+        return top - start
 
     def gap(self):
         """(reference coordinates (n, 3), gap (n,)) at the contact points."""
