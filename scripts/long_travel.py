@@ -68,6 +68,43 @@ def drafts(results, scene):
     return "\n".join(lines)
 
 
+#: The travel over which :func:`with_heave` fits the slopes [in]: where every case has gone.
+RISE = (4.0, 6.0)
+
+
+def with_heave(results, scene):
+    """Per case whose curve.csv has the heave: the heave at each second inch, and the slopes
+    of the straight lines fitted to the draft and to the heave over :data:`RISE` (the curves
+    between the steps taken as straight, sampled evenly); '' if none has it."""
+    results = [r for r in results if "heave" in r[2][0]]
+    if not results:
+        return ""
+    travels = np.arange(2.0, scene.loading.magnitude + 1e-9, 2.0)
+    low, high = RISE
+    lines = ["| element | element size [in] | "
+             + " | ".join(f"heave at {t:g} in [in]" for t in travels)
+             + f" | the draft's slope over {low:g}–{high:g} in [lb/in] | the heave's [in/in] |",
+             "| --- | --- | " + "--- | " * (len(travels) + 2)]
+    for case, _, rows, _ in results:
+        heaves = [f"{h:.2f}" if (h := at(rows, "heave", t)) is not None else "–"
+                  for t in travels]
+        slopes = [_slope(rows, "force", low, high), _slope(rows, "heave", low, high)]
+        slopes = [f"{v:.{digits}f}" if v is not None else "–"
+                  for v, digits in zip(slopes, (0, 2))]
+        lines.append(f"| {mesh_of(case, scene)} | " + " | ".join(heaves + slopes) + " |")
+    return "\n".join(lines)
+
+
+def _slope(rows, column, low, high):
+    """The slope of the straight line fitted to a column over the travel from low to high,
+    or None if the curve stops short of high."""
+    if at(rows, column, high) is None:
+        return None
+    d = np.array([r["displacement"] for r in rows])
+    x = np.linspace(low, high, 201)
+    return float(np.polyfit(x, np.interp(x, d, [r[column] for r in rows]), 1)[0])
+
+
 def costs(results, scene):
     lines = ["| element | element size [in] | cells at the start → the end | unknowns at the end | "
              "remeshes (smoothed, local) | steps (cuts) | Newton (failed) | wall time [min] | "
@@ -223,7 +260,8 @@ def main():
     summary = over_paths(results, scene)
     limit = mesh_limit(results, scene) if summary else ""
     text = ("\n\n".join(filter(None, [summary, limit, drafts(results, scene),
-                                        costs(results, scene)])) + "\n")
+                                        with_heave(results, scene), costs(results, scene)]))
+            + "\n")
     print(text)
     draw_figures(study, [Outcome(case, summary["status"], summary, ran=False)
                          for case, summary, _, _ in results], args.out)
