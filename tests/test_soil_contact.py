@@ -193,6 +193,43 @@ def test_the_contact_jacobian_is_the_derivative_of_its_residual(blocks_scene):
     assert residual() - base == pytest.approx(jacobian @ direction, rel=1e-6, abs=1e-12)
 
 
+def test_a_crease_pairs_with_a_face_that_one_of_its_sides_faces(blocks_scene):
+    """B turned 30 degrees about y and laid 0.15 over the crease of A's front (a_face, +x)
+    and top ("free", +z), its bottom (zmin, normal (sin 30, 0, -cos 30)) facing A's top
+    (150 degrees apart) but not A's front (60): every point of the crease pairs with it (the
+    mean of the crease's two normals is 105 degrees from it, short of FACING's 120), and no
+    point of A's front below the crease does."""
+    from mpi4py import MPI
+    from soilbin.meshes import scene_mesh
+    from soilbin.problem import SoilProblem
+    blocks_scene.write_text(SCENE.replace('"a_face", "b_face"', '"a_face", "free", "zmin"'))
+    scene = load_scene(blocks_scene)
+    problem = SoilProblem(scene, scene_mesh(scene, MPI.COMM_WORLD))
+    contact, w = problem.soil_contact, problem.w
+    x = problem.mesh.geometry.x
+    on_b = np.flatnonzero(x[:, 0] > LENGTH + GAP / 2)
+    angle, lift = np.radians(30.0), 0.15
+    turn = np.array([[np.cos(angle), 0.0, -np.sin(angle)], [0.0, 1.0, 0.0],
+                     [np.sin(angle), 0.0, np.cos(angle)]])
+    normal = turn @ [0.0, 0.0, -1.0]
+    # B's bottom centre onto the plane 0.15 above the crease (L, 0.5, L), 0.3 of B along +x
+    centre = np.array([LENGTH, 0.5, LENGTH]) - lift * normal + 0.3 * (turn @ [1.0, 0.0, 0.0])
+    moved = centre + (x[on_b] - [1.5 * LENGTH + GAP, 0.5, 0.0]) @ turn.T
+    for axis in range(3):
+        w.x.array[contact._dofs[on_b, axis]] = moved[:, axis] - x[on_b, axis]
+    contact.pair()
+    at = contact._x_mesh
+    crease = np.isclose(at[:, 0], LENGTH) & np.isclose(at[:, 2], LENGTH)
+    front = np.isclose(at[:, 0], LENGTH) & (at[:, 2] < LENGTH - 1e-9)
+    paired = {tuple(pair) for pair in contact._pair_nodes[:, :2].tolist()}
+    crease_points = [tuple(p) for p in contact._points.tolist() if crease[p].all()]
+    assert len(crease_points) == 7   # 4 nodes, 3 edge middles
+    assert all(p in paired for p in crease_points)
+    assert not any(front[list(p)].any() for p in paired)
+    assert np.allclose(contact._normal[[tuple(p) in crease_points
+                                        for p in contact._pair_nodes[:, :2].tolist()]], normal)
+
+
 def test_faces_too_far_apart_to_pair_leave_the_run_as_without(tmp_path, blocks_scene):
     """The blocks' far ends named: no pair on any step, and the blocks pass through each
     other with no force, as without [soil_contact]."""

@@ -9,8 +9,9 @@ each point is paired with every triangle of those faces (a quadrilateral facet c
 near it that
 
 - has none of the point's nodes as a corner,
-- faces it: its outward normal n and the point's (its nodes', area-weighted from their
-  triangles) more than 120 degrees apart (:data:`FACING`),
+- faces it: its outward normal n and that of one of the point's own triangles (a node's,
+  or the one or two with the edge whose middle it is) more than 120 degrees apart
+  (:data:`FACING`; a point on a crease faces what either of its sides faces),
 - holds the point's projection (barycentric λ >= -:data:`EDGE_TOLERANCE`) within
   -:data:`BAND_INSIDE` h .. :data:`BAND_OUTSIDE` h of its plane, h its longest edge,
 
@@ -103,6 +104,10 @@ class SoilContact:
         self._global_dofs = rows[:, 4:7].astype(PETSc.IntType)
         self._fixed = rows[:, 7:10] > 0.5
         self._points = _contact_points(self._facets)
+        n_corners = self._facets.shape[1]   # a quadrilateral facet cut in two
+        self._triangles = (self._facets if n_corners == 3 else
+                           self._facets[:, [[0, 1, 3], [0, 3, 2]]].reshape(-1, 3))
+        self._point_triangles = _point_triangles(self._triangles, self._points)
         # the faces' nodes this rank owns (local numbers), and every rank's in gathered order
         owned_ids = node_ids[:nodes_map.size_local]
         self._owned = np.isin(ids, owned_ids)
@@ -124,18 +129,12 @@ class SoilContact:
         facets, points, dofs, fixed = self._facets, self._points, self._global_dofs, self._fixed
         self._x_mesh = self._gathered(self._mesh_x[self._geometry_of_node[self._mine_local]])
         x = self._x_mesh + self._nodal_unknown()
-        n_corners = facets.shape[1]
-        triangles = facets if n_corners == 3 else facets[:, [[0, 1, 3], [0, 3, 2]]].reshape(-1, 3)
+        triangles = self._triangles
         corners = x[triangles]
         normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         area = np.linalg.norm(normal, axis=1) / 2.0
         normal /= 2.0 * area[:, None]
-        node_normal = np.zeros((len(x), 3))
-        for k in range(3):
-            np.add.at(node_normal, triangles[:, k], area[:, None] * normal)
         point_area = _point_areas(facets, points, area.reshape(len(facets), -1).sum(axis=1))
-        point_normal = node_normal[points].sum(axis=1)
-        point_normal /= np.maximum(np.linalg.norm(point_normal, axis=1), 1e-300)[:, None]
         longest = np.max([np.linalg.norm(corners[:, k] - corners[:, k - 1], axis=1)
                           for k in range(3)], axis=0)
 
@@ -151,7 +150,10 @@ class SoilContact:
         h = longest[candidates]
         apart = ~(triangles[candidates][:, :, :, None] == points[mine][:, None, None, :]).any(
             axis=(2, 3))
-        valid = (apart & (np.einsum("pj,pkj->pk", point_normal[mine], n_c) < FACING)
+        own = self._point_triangles[mine]                               # (p, m), -1: none
+        cosine = np.einsum("pmj,pkj->pmk", normal[own], n_c)
+        facing = np.where(own[:, :, None] >= 0, cosine, np.inf).min(axis=1) < FACING
+        valid = (apart & facing
                  & (weights >= -EDGE_TOLERANCE).all(axis=2)
                  & (s > -BAND_INSIDE * h) & (s < BAND_OUTSIDE * h))
         point, which = np.nonzero(valid)
@@ -246,6 +248,22 @@ def _contact_points(facets):
     each facet edge's middle ((a, b), a < b), (k, 2) node pairs in lexicographic order."""
     nodes = np.unique(facets)
     return np.unique(np.concatenate([np.column_stack([nodes, nodes]), _edges(facets)]), axis=0)
+
+
+def _point_triangles(triangles, points):
+    """The triangles (t, 3) of each contact point (k, 2), (k, m) padded with -1: those with
+    the node as a corner, or with both ends of the edge whose middle the point is."""
+    corner = triangles.ravel()
+    order = np.argsort(corner, kind="stable")
+    corner, owner = corner[order], order // 3
+    start = np.searchsorted(corner, points[:, 0])
+    stop = np.searchsorted(corner, points[:, 0], side="right")
+    width = int((stop - start).max(initial=0))
+    at = start[:, None] + np.arange(width)
+    mine = at < stop[:, None]
+    candidate = owner[np.minimum(at, len(owner) - 1)] if len(owner) else np.zeros_like(at)
+    both = (triangles[candidate] == points[:, 1, None, None]).any(axis=2)
+    return np.where(mine & both, candidate, -1)
 
 
 def _edges(facets):
