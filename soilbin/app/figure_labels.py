@@ -14,7 +14,7 @@ COLUMNS = {
     "pressure": ("pressure", "stress"),
     "lift": ("lift", "force"),
     "front_volumetric_strain": ("volumetric strain in front of the tool", None),
-    "heave": ("heave (the soil's largest rise)", "length"),
+    "heave": ("heave (the rise of the soil's highest point)", "length"),
     "mesh_quality": ("least scaled Jacobian of the mesh", None),
     "soil_contact_force": ("force of the soil pressing on itself", "force"),
     "newton_iterations": ("Newton iterations", None),
