@@ -833,3 +833,25 @@ def test_after_a_remesh_that_failed_the_run_goes_on_and_remeshes_after_the_next_
     assert steps[0] == 4 and len(steps) == summary["remeshes"]
     assert (sorted(p.name for p in (tmp_path / "meshes").iterdir())
             == [f"remesh-{step:04d}.msh" for step in steps])
+
+
+@pytest.mark.parametrize("stray", [False, True])
+def test_a_boundary_node_no_tetrahedron_has_is_counted(stray):
+    """gmsh's mesh whose boundary triangles have a node no tetrahedron has is refused before
+    DOLFINx reads it (its reader crashed the process on one): a tetrahedron and its faces,
+    one face's corner moved to a node of its own where ``stray``."""
+    from soilbin.remesh.mesher import boundary_nodes_outside
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("tetrahedron")
+        volume = gmsh.model.addDiscreteEntity(3)
+        surface = gmsh.model.addDiscreteEntity(2)
+        corners = [0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1]
+        gmsh.model.mesh.addNodes(3, volume, [1, 2, 3, 4, 5], corners)
+        gmsh.model.mesh.addElementsByType(volume, 4, [1], [1, 2, 3, 4])
+        faces = [1, 3, 2, 1, 2, 4, 1, 4, 3, 2, 3, 5 if stray else 4]
+        gmsh.model.mesh.addElementsByType(surface, 2, [2, 3, 4, 5], faces)
+        assert boundary_nodes_outside() == (1 if stray else 0)
+    finally:
+        gmsh.finalize()
